@@ -1,0 +1,50 @@
+#pragma once
+/// @file
+/// Planar rigid transform (SE(2)) and angle helpers.
+
+#include <Eigen/Core>
+#include <cmath>
+
+namespace dispel {
+
+inline constexpr double kPi = 3.14159265358979323846;
+
+/// Wraps an angle to [-pi, pi).
+inline double wrap_angle(double angle_rad) {
+  constexpr double kTwoPi = 2.0 * kPi;
+  double a = std::fmod(angle_rad + kPi, kTwoPi);
+  if (a < 0.0) a += kTwoPi;
+  return a - kPi;
+}
+
+/// A pose in the plane: the frame it describes, seen from a parent frame. Applying it maps a point
+/// from the child frame into the parent frame: p_parent = R(yaw) * p_child + (x, y).
+struct Pose2 {
+  double x_m = 0.0;
+  double y_m = 0.0;
+  double yaw_rad = 0.0;
+
+  Eigen::Vector2d translation() const { return {x_m, y_m}; }
+
+  /// Maps a point given in this pose's frame into the parent frame.
+  Eigen::Vector2d apply(const Eigen::Vector2d& p) const {
+    const double c = std::cos(yaw_rad);
+    const double s = std::sin(yaw_rad);
+    return {c * p.x() - s * p.y() + x_m, s * p.x() + c * p.y() + y_m};
+  }
+
+  /// The inverse transform (parent seen from this frame).
+  Pose2 inverse() const {
+    const double c = std::cos(yaw_rad);
+    const double s = std::sin(yaw_rad);
+    return {-(c * x_m + s * y_m), s * x_m - c * y_m, wrap_angle(-yaw_rad)};
+  }
+
+  /// Composition: (*this) * other maps other's child frame into this pose's parent frame.
+  Pose2 operator*(const Pose2& other) const {
+    const Eigen::Vector2d t = apply(other.translation());
+    return {t.x(), t.y(), wrap_angle(yaw_rad + other.yaw_rad)};
+  }
+};
+
+}  // namespace dispel

@@ -1,0 +1,83 @@
+#include "dispel/sim/raycast.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace dispel::sim {
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+}  // namespace
+
+double ray_distance(const Segment& shape, const Eigen::Vector2d& origin,
+                    const Eigen::Vector2d& direction) {
+  // origin + t * direction = a + u * (b - a), t >= 0, u in [0, 1].
+  const Eigen::Vector2d edge = shape.b - shape.a;
+  const double denom = cross(direction, edge);
+  if (std::abs(denom) < 1e-15) return kInf;  // Parallel: a grazing ray sees no surface.
+  const Eigen::Vector2d to_a = shape.a - origin;
+  const double t = cross(to_a, edge) / denom;
+  const double u = cross(to_a, direction) / denom;
+  if (t < 0.0 || u < 0.0 || u > 1.0) return kInf;
+  return t;
+}
+
+double ray_distance(const Circle& shape, const Eigen::Vector2d& origin,
+                    const Eigen::Vector2d& direction) {
+  const Eigen::Vector2d to_center = shape.center - origin;
+  const double along = to_center.dot(direction);
+  const double miss_sq = to_center.squaredNorm() - along * along;
+  const double r_sq = shape.radius_m * shape.radius_m;
+  if (miss_sq > r_sq) return kInf;
+  const double half_chord = std::sqrt(r_sq - miss_sq);
+  const double near = along - half_chord;
+  if (near >= 0.0) return near;
+  const double far = along + half_chord;  // Origin inside the circle: the far side.
+  return far >= 0.0 ? far : kInf;
+}
+
+LaserScan raycast(const World& world, const Pose2& sensor_pose, const ScanGeometry& geometry,
+                  std::vector<std::int32_t>* hit_shape) {
+  LaserScan scan;
+  scan.angle_min_rad = geometry.angle_min_rad;
+  scan.angle_increment_rad = geometry.angle_increment_rad;
+  scan.range_min_m = geometry.range_min_m;
+  scan.range_max_m = geometry.range_max_m;
+  const auto n = static_cast<std::size_t>(geometry.beam_count > 0 ? geometry.beam_count : 0);
+  scan.ranges_m.resize(n);
+  if (hit_shape != nullptr) hit_shape->assign(n, kNoHit);
+  const Eigen::Vector2d origin = sensor_pose.translation();
+  const auto segment_count = static_cast<std::int32_t>(world.segments.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    const double bearing = sensor_pose.yaw_rad + scan.bearing_rad(i);
+    const Eigen::Vector2d direction(std::cos(bearing), std::sin(bearing));
+    double best = kInf;
+    std::int32_t best_id = kNoHit;
+    for (std::int32_t s = 0; s < segment_count; ++s) {
+      const double t = ray_distance(world.segments[s], origin, direction);
+      if (t < best) {
+        best = t;
+        best_id = s;
+      }
+    }
+    for (std::size_t c = 0; c < world.circles.size(); ++c) {
+      const double t = ray_distance(world.circles[c], origin, direction);
+      if (t < best) {
+        best = t;
+        best_id = segment_count + static_cast<std::int32_t>(c);
+      }
+    }
+    if (best > geometry.range_max_m) {
+      best = kInf;
+      best_id = kNoHit;
+    }
+    scan.ranges_m[i] = static_cast<float>(best);
+    if (hit_shape != nullptr) (*hit_shape)[i] = best_id;
+  }
+  return scan;
+}
+
+}  // namespace dispel::sim

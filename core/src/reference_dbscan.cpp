@@ -73,7 +73,8 @@ class Grid {
   }
   static std::int64_t pack(std::int64_t cx, std::int64_t cy) {
     // Cells of a scan span far less than 2^31 in each direction.
-    return (cx << 32) + (cy & 0xffffffffLL);
+    const auto high = static_cast<std::uint64_t>(static_cast<std::uint32_t>(cx)) << 32;
+    return static_cast<std::int64_t>(high | static_cast<std::uint32_t>(cy));
   }
   std::int64_t key(const Point& p) const {
     const auto [cx, cy] = cell(p);

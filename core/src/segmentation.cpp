@@ -23,20 +23,110 @@ std::string str(const T& value) {
 
 inline float square(float v) { return v * v; }
 
-// State carried through the pass; the pass may be split in two index ranges (the seam).
+using segmentation_detail::Cluster;
+using segmentation_detail::Object;
+
+// What the pass reads.
+struct PassInput {
+  const float* ranges;
+  const float* unit_x;
+  const float* unit_y;
+  const std::uint8_t* masked;
+  float range_min, range_max, gap, gap_sq;
+};
+
+// What the pass carries from one index range to the next (the two halves of a rotated circle).
 struct PassState {
   bool have_prev = false;
-  float prev_x = 0.0F;
-  float prev_y = 0.0F;
-  float prev_range = 0.0F;
-  std::int32_t run = 0;
-  std::int32_t invalid = 0;
-  std::int32_t masked = 0;
-  // The open cluster's running sums live in registers; flushed into the cluster on close.
+  float prev_x = 0.0F, prev_y = 0.0F, prev_range = 0.0F;
+  std::int32_t prev_beam = 0, prev_pos = 0;
+  std::int32_t run = 0, invalid = 0, masked = 0;
+  // The open cluster's running sums, flushed into the cluster when it closes.
   std::int32_t open_count = 0;
-  double open_sum_x = 0.0;
-  double open_sum_y = 0.0;
+  double open_sum_x = 0.0, open_sum_y = 0.0;
 };
+
+void close_cluster(PassState& st, std::vector<Cluster>& clusters) {
+  if (st.open_count == 0) return;
+  Cluster& c = clusters.back();
+  c.last_pos = st.prev_pos;
+  c.last_beam = st.prev_beam;
+  c.count = st.open_count;
+  c.sum_x = st.open_sum_x;
+  c.sum_y = st.open_sum_y;
+  c.last_x = st.prev_x;
+  c.last_y = st.prev_y;
+  c.last_range = st.prev_range;
+  st.open_count = 0;
+  st.open_sum_x = st.open_sum_y = 0.0;
+}
+
+// The pass over beams [begin, end) (thesis Algorithm 1): a valid beam joins the open cluster when
+// its gap to the previous valid beam is at most eps; otherwise it opens a new cluster. Invalid
+// beams are skipped, so the gap is measured across them (with the true angle under the Euclidean
+// metric); masked beams close the open cluster. The state is a local copy so that the compiler
+// can keep it in registers (the label stores could otherwise alias it).
+template <bool kEuclidean, bool kAnyMasked>
+PassState run_pass(const PassInput& in, std::int32_t begin, std::int32_t end,
+                   std::int32_t pos_offset, PassState st, std::int32_t* labels,
+                   std::vector<Cluster>& clusters) {
+  auto cluster_id = static_cast<std::int32_t>(clusters.size()) - 1;
+  const float* const ranges = in.ranges;  // Locals: push_back below would force reloads.
+  const float* const unit_x = in.unit_x;
+  const float* const unit_y = in.unit_y;
+  const std::uint8_t* const masked = in.masked;
+  const float range_min = in.range_min;
+  const float range_max = in.range_max;
+  const float gap = in.gap;
+  const float gap_sq = in.gap_sq;
+  for (std::int32_t i = begin; i < end; ++i) {
+    if (kAnyMasked && masked[i] != 0) {
+      labels[i] = kLabelMasked;
+      ++st.masked;
+      st.have_prev = false;
+      ++st.run;
+      continue;
+    }
+    const float r = ranges[i];
+    if (!(r >= range_min && r <= range_max)) {
+      labels[i] = kLabelInvalid;
+      ++st.invalid;
+      continue;
+    }
+    const float x = r * unit_x[i];
+    const float y = r * unit_y[i];
+    bool join = st.have_prev;
+    if (kEuclidean) {
+      const float dx = x - st.prev_x;
+      const float dy = y - st.prev_y;
+      join = join && dx * dx + dy * dy <= gap_sq;
+    } else {
+      join = join && std::fabs(r - st.prev_range) <= gap;
+    }
+    if (!join) {
+      close_cluster(st, clusters);
+      Cluster c{};
+      c.first_pos = i + pos_offset;
+      c.first_beam = i;
+      c.run = st.run;
+      c.first_x = x;
+      c.first_y = y;
+      clusters.push_back(c);
+      ++cluster_id;
+    }
+    ++st.open_count;
+    st.open_sum_x += x;
+    st.open_sum_y += y;
+    labels[i] = cluster_id;
+    st.prev_x = x;
+    st.prev_y = y;
+    st.prev_range = r;
+    st.prev_beam = i;
+    st.prev_pos = i + pos_offset;
+    st.have_prev = true;
+  }
+  return st;
+}
 
 }  // namespace
 
@@ -164,83 +254,22 @@ void Segmenter::segment(const LaserScan& scan, Segmentation& out) {
   bool seam_continuous = false;
   const std::int32_t start = full_circle_ ? find_rotation_start(scan, seam_continuous) : 0;
 
-  // The pass (thesis Algorithm 1): a valid beam joins the open cluster when its gap to the previous
-  // valid beam is at most eps; otherwise it opens a new cluster. Invalid beams are skipped, so
-  // the gap is measured across them (with the true angle under the Euclidean metric); masked
-  // beams close the open cluster.
   clusters_.clear();
-  PassState st;
-  const float* ranges = scan.ranges_m.data();
-  const float* ux = unit_x_.data();
-  const float* uy = unit_y_.data();
-  const std::uint8_t* masked = masked_.data();
+  const PassInput in{scan.ranges_m.data(),
+                     unit_x_.data(),
+                     unit_y_.data(),
+                     masked_.data(),
+                     scan.range_min_m,
+                     scan.range_max_m,
+                     static_cast<float>(config_.cluster_gap_m),
+                     static_cast<float>(cluster_gap_sq_m2_)};
+  auto pass = config_.gap_metric == GapMetric::kEuclidean
+                  ? (any_masked_ ? &run_pass<true, true> : &run_pass<true, false>)
+                  : (any_masked_ ? &run_pass<false, true> : &run_pass<false, false>);
   std::int32_t* labels = out.beam_labels.data();
-  const float range_min = scan.range_min_m;
-  const float range_max = scan.range_max_m;
-  const auto gap_sq = static_cast<float>(cluster_gap_sq_m2_);
-  const auto gap = static_cast<float>(config_.cluster_gap_m);
-  const bool euclid = config_.gap_metric == GapMetric::kEuclidean;
-  const bool any_masked = any_masked_;
-
-  auto close_open = [&]() {
-    if (st.open_count == 0) return;
-    Cluster& c = clusters_.back();
-    c.count = st.open_count;
-    c.sum_x = st.open_sum_x;
-    c.sum_y = st.open_sum_y;
-    c.last_x = st.prev_x;
-    c.last_y = st.prev_y;
-    c.last_range = st.prev_range;
-    st.open_count = 0;
-    st.open_sum_x = st.open_sum_y = 0.0;
-  };
-  auto pass = [&](std::int32_t begin, std::int32_t end, std::int32_t pos_offset) {
-    for (std::int32_t i = begin; i < end; ++i) {
-      if (any_masked && masked[i] != 0) {
-        labels[i] = kLabelMasked;
-        ++st.masked;
-        st.have_prev = false;
-        ++st.run;
-        continue;
-      }
-      const float r = ranges[i];
-      if (!(r >= range_min && r <= range_max)) {
-        labels[i] = kLabelInvalid;
-        ++st.invalid;
-        continue;
-      }
-      const float x = r * ux[i];
-      const float y = r * uy[i];
-      const bool join =
-          st.have_prev && (euclid ? square(x - st.prev_x) + square(y - st.prev_y) <= gap_sq
-                                  : std::fabs(r - st.prev_range) <= gap);
-      if (!join) {
-        close_open();
-        Cluster c{};
-        c.first_pos = c.last_pos = i + pos_offset;
-        c.first_beam = c.last_beam = i;
-        c.run = st.run;
-        c.first_x = x;
-        c.first_y = y;
-        clusters_.push_back(c);
-      } else {
-        Cluster& c = clusters_.back();
-        c.last_pos = i + pos_offset;
-        c.last_beam = i;
-      }
-      ++st.open_count;
-      st.open_sum_x += x;
-      st.open_sum_y += y;
-      labels[i] = static_cast<std::int32_t>(clusters_.size()) - 1;
-      st.prev_x = x;
-      st.prev_y = y;
-      st.prev_range = r;
-      st.have_prev = true;
-    }
-  };
-  pass(start, n, -start);
-  pass(0, start, n - start);
-  close_open();
+  PassState st = pass(in, start, n, -start, PassState{}, labels, clusters_);
+  st = pass(in, 0, start, n - start, st, labels, clusters_);
+  close_cluster(st, clusters_);
 
   out.invalid_beams = st.invalid;
   out.masked_beams = st.masked;
@@ -253,10 +282,8 @@ void Segmenter::segment(const LaserScan& scan, Segmentation& out) {
 
 // Facing-edge merge. Clusters are visited in processing order; each is appended to the open object
 // whose last edge point is nearest to its first edge point within eps, or starts a new object.
-// An object stays open while a later cluster could still be within eps of its last edge: a point
-// at bearing offset dtheta from an edge at range r is at least r * sin(dtheta) away (for dtheta up
-// to 90 deg, and at least r beyond), so the window is a few beams at long range and the merge stays
-// linear in the number of clusters.
+// An object stays open while a later cluster could still be within eps of its last edge (see
+// reach_of): a few beams at long range, so the merge stays linear in the number of clusters.
 void Segmenter::merge_clusters(bool seam_continuous, std::int32_t final_run, std::int32_t n,
                                double increment_rad) {
   const auto cluster_count = static_cast<std::int32_t>(clusters_.size());
@@ -265,9 +292,19 @@ void Segmenter::merge_clusters(bool seam_continuous, std::int32_t final_run, std
   open_.clear();
   const double gap = config_.cluster_gap_m;
 
+  // Last position from which a later cluster could still be within eps of cluster c's last edge.
+  // A point dtheta further on is at least r * sin(dtheta) >= r * dtheta * 2 / pi away (up to
+  // 90 deg, and r beyond), so nothing past dtheta = (pi / 2) * eps / r can be reached.
+  const double beams_per_rad = 1.0 / increment_rad;
+  auto reach_of = [&](std::int32_t c) {
+    const Cluster& cl = clusters_[c];
+    if (cl.last_range <= gap) return cl.last_pos + n;
+    const double window = 0.5 * kPi * gap / cl.last_range * beams_per_rad;
+    return cl.last_pos + static_cast<std::int32_t>(window) + 1;
+  };
   auto new_object = [&](std::int32_t c) {
-    Object o{c, c, clusters_[c].count, 1, clusters_[c].sum_x, clusters_[c].sum_y, true};
-    work_objects_.push_back(o);
+    const Cluster& cl = clusters_[c];
+    work_objects_.push_back({c, c, cl.count, 1, reach_of(c), cl.sum_x, cl.sum_y, true});
     object_of_cluster_[c] = static_cast<std::int32_t>(work_objects_.size()) - 1;
     return object_of_cluster_[c];
   };
@@ -275,12 +312,6 @@ void Segmenter::merge_clusters(bool seam_continuous, std::int32_t final_run, std
     const double dx = static_cast<double>(last_of.last_x) - first_of.first_x;
     const double dy = static_cast<double>(last_of.last_y) - first_of.first_y;
     return dx * dx + dy * dy;
-  };
-  // Lower bound on the distance from an edge at range r to any point dpos beams further on.
-  auto out_of_reach = [&](float edge_range, std::int32_t dpos) {
-    const double dtheta = static_cast<double>(dpos) * increment_rad;
-    const double bound = dtheta >= 0.5 * kPi ? edge_range : edge_range * std::sin(dtheta);
-    return bound > gap;
   };
 
   if (!config_.merge_facing_edges) {
@@ -295,7 +326,7 @@ void Segmenter::merge_clusters(bool seam_continuous, std::int32_t final_run, std
     std::size_t kept = 0;
     for (std::int32_t o : open_) {
       const Cluster& tail = clusters_[work_objects_[o].last_cluster];
-      if (tail.run != cl.run || out_of_reach(tail.last_range, cl.first_pos - tail.last_pos)) {
+      if (tail.run != cl.run || cl.first_pos > work_objects_[o].reach_pos) {
         continue;  // Closed for good: later clusters are even further away.
       }
       open_[kept++] = o;
@@ -312,6 +343,7 @@ void Segmenter::merge_clusters(bool seam_continuous, std::int32_t final_run, std
     }
     Object& o = work_objects_[best];
     o.last_cluster = c;
+    o.reach_pos = reach_of(c);
     o.count += cl.count;
     o.cluster_count += 1;
     o.sum_x += cl.sum_x;
@@ -330,7 +362,7 @@ void Segmenter::merge_clusters(bool seam_continuous, std::int32_t final_run, std
     double best_sq = cluster_gap_sq_m2_;
     for (std::int32_t c = 0; c < cluster_count; ++c) {
       const Cluster& head = clusters_[c];
-      if (head.run != 0 || out_of_reach(tail.last_range, head.first_pos + n - tail.last_pos)) {
+      if (head.run != 0 || head.first_pos + n > tail_obj.reach_pos) {
         break;
       }
       const std::int32_t h = object_of_cluster_[c];
@@ -345,6 +377,7 @@ void Segmenter::merge_clusters(bool seam_continuous, std::int32_t final_run, std
     // The tail object absorbs the head object: it now runs from its own first edge over the seam.
     Object& head_obj = work_objects_[best];
     tail_obj.last_cluster = head_obj.last_cluster;
+    tail_obj.reach_pos = head_obj.reach_pos + n;
     tail_obj.count += head_obj.count;
     tail_obj.cluster_count += head_obj.cluster_count;
     tail_obj.sum_x += head_obj.sum_x;

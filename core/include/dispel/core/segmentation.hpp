@@ -110,6 +110,27 @@ struct Segmentation {
   std::int32_t merges = 0;         ///< Facing-edge merges performed.
 };
 
+namespace segmentation_detail {
+// A run of bearing-consecutive beams joined by the pass. Positions count beams in processing
+// order, which starts at a cluster boundary on full-circle scans.
+struct Cluster {
+  std::int32_t first_pos, last_pos;
+  std::int32_t first_beam, last_beam;
+  std::int32_t count;
+  std::int32_t run;  // Clusters with different runs have a masked sector between them.
+  float first_x, first_y, last_x, last_y, last_range;
+  double sum_x, sum_y;
+};
+// An object being assembled from clusters by the facing-edge merge.
+struct Object {
+  std::int32_t first_cluster, last_cluster;
+  std::int32_t count, cluster_count;
+  std::int32_t reach_pos;  // Clusters starting after this position cannot merge into it.
+  double sum_x, sum_y;
+  bool alive;
+};
+}  // namespace segmentation_detail
+
 /// Segments scans. Keeps buffers and a table of beam directions between calls, so that
 /// segmenting a stream of scans of one geometry allocates nothing after the first scan.
 /// Not thread-safe: use one Segmenter per thread.
@@ -132,24 +153,6 @@ class Segmenter {
   const SegmentationConfig& config() const { return config_; }
 
  private:
-  // A run of bearing-consecutive beams joined by the pass. Positions count beams in processing
-  // order, which starts at a cluster boundary on full-circle scans.
-  struct Cluster {
-    std::int32_t first_pos, last_pos;
-    std::int32_t first_beam, last_beam;
-    std::int32_t count;
-    std::int32_t run;  // Clusters with different runs have a masked sector between them.
-    float first_x, first_y, last_x, last_y, last_range;
-    double sum_x, sum_y;
-  };
-  // An object being assembled from clusters by the facing-edge merge.
-  struct Object {
-    std::int32_t first_cluster, last_cluster;
-    std::int32_t count, cluster_count;
-    double sum_x, sum_y;
-    bool alive;
-  };
-
   void update_geometry(const LaserScan& scan);
   std::int32_t find_rotation_start(const LaserScan& scan, bool& seam_continuous) const;
   void merge_clusters(bool seam_continuous, std::int32_t final_run, std::int32_t n,
@@ -171,8 +174,8 @@ class Segmenter {
   std::vector<std::uint8_t> masked_;
 
   // Scratch reused between scans.
-  std::vector<Cluster> clusters_;
-  std::vector<Object> work_objects_;
+  std::vector<segmentation_detail::Cluster> clusters_;
+  std::vector<segmentation_detail::Object> work_objects_;
   std::vector<std::int32_t> object_of_cluster_;
   std::vector<std::int32_t> cluster_label_;
   std::vector<std::int32_t> open_;

@@ -1,0 +1,27 @@
+#pragma once
+// The benchmark cases shared by the Google Benchmark program (dispel_benchmarks) and
+// `dispel bench`: one definition of what is measured, two ways to run it.
+
+#include <cstdint>
+
+#include "dispel/core/laser_scan.hpp"
+
+namespace dispel::bench {
+
+/// A scan of a warehouse hall as the thesis's scanner would see it (275 deg field of view,
+/// 40 m range) with @p beams beams: walls, racks, pillars and people, 1% dropouts. The scene is
+/// the same for every size, so time per beam is comparable across sizes.
+LaserScan hall_scan(std::int32_t beams);
+
+/// How many times each case is repeated and for how long at least (seconds per repetition).
+struct RunSettings {
+  int repetitions = 5;
+  double min_time_s = 0.2;
+};
+
+/// Registers every case with Google Benchmark. Names are "<algorithm>/<beams>", algorithm one of
+/// segmentation, reference_dbscan (brute force) and reference_dbscan_grid. Each run sets the
+/// counter "beams".
+void register_benchmarks(const RunSettings& settings);
+
+}  // namespace dispel::bench

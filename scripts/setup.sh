@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Installs the Debian packages dispel needs that are not installed yet (Debian bookworm).
+# Runs apt-get as root (or through sudo); does nothing when everything is present.
+set -euo pipefail
+
+packages=(
+  cmake make g++                       # build
+  libeigen3-dev                        # core
+  libcli11-dev nlohmann-json3-dev      # command line, JSON output
+  libgtest-dev libbenchmark-dev        # tests, benchmarks
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "setup: need root to install: ${missing[*]}" >&2; exit 1; }
+  sudo=sudo
+fi
+echo "setup: installing ${missing[*]}"
+$sudo apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"

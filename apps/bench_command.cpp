@@ -132,11 +132,11 @@ int run_bench(const BenchOptions& options) {
   }
   if (!collector.errors().empty()) return 1;
   if (options.json) {
-    nlohmann::json results = nlohmann::json::array();
+    nlohmann::ordered_json results = nlohmann::ordered_json::array();
     for (const Result& r : collector.results()) {
       results.push_back({{"name", r.name}, {"beams", r.beams}, {"median_ns", r.median_ns}});
     }
-    std::cout << nlohmann::json{{"results", results}}.dump(2) << std::endl;
+    std::cout << nlohmann::ordered_json{{"results", results}}.dump(2) << std::endl;
   } else {
     print_summary(collector.results());
   }

@@ -12,13 +12,13 @@
 int main(int argc, char** argv) {
   CLI::App app{"dispel: removes moving objects from 2D LiDAR scans before SLAM sees them"};
   app.set_version_flag("--version", DISPEL_VERSION);
-  app.require_subcommand(1);
+  app.require_subcommand(0, 1);
 
   dispel::apps::BenchOptions bench;
   CLI::App* bench_cmd = app.add_subcommand(
       "bench", "Measure segmentation and the reference DBSCAN at 1617 to 1000000 beams");
   bench_cmd->add_flag("--json", bench.json, R"(Print {"results": [{"name", "beams", "median_ns"}]})");
-  bench_cmd->add_option("--filter", bench.filter, "Regular expression on case names")
+  bench_cmd->add_option("--filter", bench.filter, "Regular expression on case names such as segmentation/1617/...")
       ->capture_default_str();
   bench_cmd->add_option("--repetitions", bench.repetitions, "Repetitions per case (median taken)")
       ->check(CLI::Range(1, 1000))
@@ -38,5 +38,6 @@ int main(int argc, char** argv) {
     std::cerr << "dispel: " << e.what() << "\n";
     return 1;
   }
-  return 0;
+  std::cerr << "dispel: no command given\n" << app.help();
+  return 1;
 }

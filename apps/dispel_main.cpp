@@ -17,8 +17,11 @@ int main(int argc, char** argv) {
   dispel::apps::BenchOptions bench;
   CLI::App* bench_cmd = app.add_subcommand(
       "bench", "Measure segmentation and the reference DBSCAN at 1617 to 1000000 beams");
-  bench_cmd->add_flag("--json", bench.json, R"(Print {"results": [{"name", "beams", "median_ns"}]})");
-  bench_cmd->add_option("--filter", bench.filter, "Regular expression on case names such as segmentation/1617/...")
+  bench_cmd->add_flag("--json", bench.json,
+                      R"(Print {"results": [{"name", "beams", "median_ns"}]})");
+  bench_cmd
+      ->add_option("--filter", bench.filter,
+                   "Regular expression on case names such as segmentation/1617/...")
       ->capture_default_str();
   bench_cmd->add_option("--repetitions", bench.repetitions, "Repetitions per case (median taken)")
       ->check(CLI::Range(1, 1000))

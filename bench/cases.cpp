@@ -110,11 +110,17 @@ void register_benchmarks(const RunSettings& settings) {
   };
   // 1617 beams is the thesis's scanner; 11 000 the largest size the thesis timed.
   configure(benchmark::RegisterBenchmark("segmentation", segmentation)
-                ->Arg(1617)->Arg(11000)->Arg(100000)->Arg(1000000));
+                ->Arg(1617)
+                ->Arg(11000)
+                ->Arg(100000)
+                ->Arg(1000000));
   configure(benchmark::RegisterBenchmark("reference_dbscan", dbscan<NeighbourSearch::kBruteForce>)
-                ->Arg(1617)->Arg(11000));
+                ->Arg(1617)
+                ->Arg(11000));
   configure(benchmark::RegisterBenchmark("reference_dbscan_grid", dbscan<NeighbourSearch::kGrid>)
-                ->Arg(1617)->Arg(11000)->Arg(100000));
+                ->Arg(1617)
+                ->Arg(11000)
+                ->Arg(100000));
 }
 
 }  // namespace dispel::bench

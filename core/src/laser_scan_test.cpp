@@ -15,7 +15,12 @@ LaserScan good_scan() {
   scan.angle_increment_rad = 0.01;
   scan.range_min_m = 0.1F;
   scan.range_max_m = 20.0F;
-  scan.ranges_m = {0.05F, 0.1F, 5.0F, 20.0F, 20.5F, std::numeric_limits<float>::quiet_NaN(),
+  scan.ranges_m = {0.05F,
+                   0.1F,
+                   5.0F,
+                   20.0F,
+                   20.5F,
+                   std::numeric_limits<float>::quiet_NaN(),
                    std::numeric_limits<float>::infinity()};
   return scan;
 }

@@ -149,9 +149,8 @@ Scene random_scene(std::mt19937& rng, bool noise) {
     const auto [ia, new_a] = a_to_b.emplace(a[i], b[i]);
     const auto [ib, new_b] = b_to_a.emplace(b[i], a[i]);
     if (ia->second != b[i] || ib->second != a[i]) {
-      return ::testing::AssertionFailure()
-             << "beam " << i << " joins group " << a[i] << " and " << b[i]
-             << " which the other labeling splits or merges";
+      return ::testing::AssertionFailure() << "beam " << i << " joins group " << a[i] << " and "
+                                           << b[i] << " which the other labeling splits or merges";
     }
   }
   return ::testing::AssertionSuccess();
@@ -199,8 +198,8 @@ TEST(ReferenceDbscan, AgreesWithSinglePassOnEveryDensePointOfSeparatedScenes) {
       const std::int32_t b = ref.beam_labels[i];
       if ((a < 0) != (b < 0)) {
         ++differ;
-        EXPECT_LT(counts[i], config.min_points) << "scene " << trial << " dense beam " << i
-                                                << " labelled " << a << " and " << b;
+        EXPECT_LT(counts[i], config.min_points)
+            << "scene " << trial << " dense beam " << i << " labelled " << a << " and " << b;
         continue;
       }
       if (a < 0) continue;

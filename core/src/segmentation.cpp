@@ -193,8 +193,8 @@ void Segmenter::update_geometry(const LaserScan& scan) {
   }
   // A scan whose beams span a whole turn (some drivers repeat the first bearing at the end).
   const double span = static_cast<double>(n) * scan.angle_increment_rad;
-  full_circle_ = config_.join_full_circle_seam && n > 1 &&
-                 span >= 2.0 * kPi - 0.5 * scan.angle_increment_rad;
+  full_circle_ =
+      config_.join_full_circle_seam && n > 1 && span >= 2.0 * kPi - 0.5 * scan.angle_increment_rad;
 }
 
 // On a full-circle scan the pass must start where a cluster starts, or the cluster across the seam
@@ -398,8 +398,7 @@ EdgeNeighbour Segmenter::neighbour_of(const LaserScan& scan, std::int32_t beam, 
   }
   if (masked_[j] != 0) return EdgeNeighbour::kMaskedSector;
   if (!scan.is_valid(j)) return EdgeNeighbour::kInvalid;
-  return scan.ranges_m[j] < scan.ranges_m[beam] ? EdgeNeighbour::kCloser
-                                                 : EdgeNeighbour::kFarther;
+  return scan.ranges_m[j] < scan.ranges_m[beam] ? EdgeNeighbour::kCloser : EdgeNeighbour::kFarther;
 }
 
 void Segmenter::write_objects(const LaserScan& scan, Segmentation& out) {

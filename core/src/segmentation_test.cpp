@@ -58,8 +58,8 @@ std::vector<std::vector<std::int32_t>> beams_by_object(const Segmentation& seg) 
 const ScanObject* object_near(const Segmentation& seg, const Eigen::Vector2d& p, double tol) {
   const ScanObject* best = nullptr;
   for (const ScanObject& o : seg.objects) {
-    if ((o.centroid_m - p).norm() <= tol && (best == nullptr || (o.centroid_m - p).norm() <
-                                                                    (best->centroid_m - p).norm())) {
+    if ((o.centroid_m - p).norm() <= tol &&
+        (best == nullptr || (o.centroid_m - p).norm() < (best->centroid_m - p).norm())) {
       best = &o;
     }
   }
@@ -416,10 +416,9 @@ TEST(Segmentation, MergeNeverCrossesAMaskedSector) {
 
 TEST(Segmentation, MaskedSectorAcrossBearingPi) {
   // A sector given as 170..190 degrees covers the bearings either side of +-180.
-  LaserScan scan = cast({{wall(-3, -3, -3, 3), wall(3, -3, 3, 3), wall(-3, 3, 3, 3),
-                          wall(-3, -3, 3, -3)},
-                         {}},
-                        full_circle_geometry());
+  LaserScan scan =
+      cast({{wall(-3, -3, -3, 3), wall(3, -3, 3, 3), wall(-3, 3, 3, 3), wall(-3, -3, 3, -3)}, {}},
+           full_circle_geometry());
   SegmentationConfig config;
   config.masked_sectors = {{170.0 * kDeg, 190.0 * kDeg}};
   Segmenter segmenter{config};
@@ -486,11 +485,13 @@ TEST(Segmentation, FullCircleResultDoesNotDependOnWhereTheSeamIs) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int trial = 0; trial < 20; ++trial) {
     World world;
-    world.segments = {wall(-6, -5, 6, -5), wall(6, -5, 6, 5), wall(6, 5, -6, 5), wall(-6, 5, -6, -5)};
+    world.segments = {wall(-6, -5, 6, -5), wall(6, -5, 6, 5), wall(6, 5, -6, 5),
+                      wall(-6, 5, -6, -5)};
     for (int p = 0; p < 6; ++p) {  // Pairs of legs and pillars around the sensor.
       const Eigen::Vector2d c(3.5 * u(rng), 3.5 * u(rng));
       if (c.norm() < 0.8) continue;
-      const Eigen::Vector2d side = Eigen::Vector2d(-c.y(), c.x()).normalized() * (0.08 + 0.04 * u(rng));
+      const Eigen::Vector2d side =
+          Eigen::Vector2d(-c.y(), c.x()).normalized() * (0.08 + 0.04 * u(rng));
       world.circles.push_back({c + side, 0.06});
       world.circles.push_back({c - side, 0.06});
     }
@@ -626,8 +627,8 @@ TEST(Segmenter, ReusedAcrossGeometriesGivesTheSameAsAFreshSegmenter) {
   world.segments = {wall(4.0, -3.0, 4.0, 3.0)};
   world.circles = {{{2.0, 0.5}, 0.15}, {{-1.0, -1.0}, 0.3}};
   Segmenter reused{SegmentationConfig{}};
-  for (const ScanGeometry& g : {thesis_geometry(), full_circle_geometry(), thesis_geometry(),
-                                full_circle_geometry(1.0)}) {
+  for (const ScanGeometry& g :
+       {thesis_geometry(), full_circle_geometry(), thesis_geometry(), full_circle_geometry(1.0)}) {
     const LaserScan scan = cast(world, g);
     Segmenter fresh{SegmentationConfig{}};
     EXPECT_EQ(reused.segment(scan).beam_labels, fresh.segment(scan).beam_labels);

@@ -40,12 +40,12 @@ struct LaserScan {
 /// What can be wrong with a scan as a whole. A scan with any of these is rejected, never used.
 enum class ScanIssue {
   kNone = 0,
-  kEmpty,                    ///< No beams.
-  kNonFiniteAngles,          ///< angle_min_rad or angle_increment_rad is NaN or infinite.
-  kNonPositiveIncrement,     ///< angle_increment_rad <= 0.
-  kBadRangeLimits,           ///< range_min_m < 0, NaN, or range_max_m <= range_min_m.
-  kIntensityCountMismatch,   ///< intensities is neither empty nor one per beam.
-  kNonFiniteStamp,           ///< stamp_s is NaN or infinite.
+  kEmpty,                   ///< No beams.
+  kNonFiniteAngles,         ///< angle_min_rad or angle_increment_rad is NaN or infinite.
+  kNonPositiveIncrement,    ///< angle_increment_rad <= 0.
+  kBadRangeLimits,          ///< range_min_m < 0, NaN, or range_max_m <= range_min_m.
+  kIntensityCountMismatch,  ///< intensities is neither empty nor one per beam.
+  kNonFiniteStamp,          ///< stamp_s is NaN or infinite.
 };
 
 /// Number of ScanIssue values, for counting skipped scans by reason.

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
-/// Classic DBSCAN (Ester et al., 1996) on the Cartesian points of a scan: the textbook algorithm the
-/// single-pass segmentation replaces, kept to cross-check it and to benchmark against.
+/// Classic DBSCAN (Ester et al., 1996) on the Cartesian points of a scan: the textbook algorithm
+/// the single-pass segmentation replaces, kept to cross-check it and to benchmark against.
 
 #include <cstdint>
 #include <vector>

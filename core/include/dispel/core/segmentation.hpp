@@ -83,9 +83,9 @@ struct ScanObject {
   std::int32_t last_beam = 0;
   std::int32_t point_count = 0;    ///< Beams labelled with this object.
   std::int32_t cluster_count = 0;  ///< Clusters merged into it by facing edges (1 = none).
-  Eigen::Vector2d first_point_m = Eigen::Vector2d::Zero();  ///< Point of first_beam.
-  Eigen::Vector2d last_point_m = Eigen::Vector2d::Zero();   ///< Point of last_beam.
-  Eigen::Vector2d centroid_m = Eigen::Vector2d::Zero();     ///< Mean of the object's points.
+  Eigen::Vector2d first_point_m = Eigen::Vector2d::Zero();      ///< Point of first_beam.
+  Eigen::Vector2d last_point_m = Eigen::Vector2d::Zero();       ///< Point of last_beam.
+  Eigen::Vector2d centroid_m = Eigen::Vector2d::Zero();         ///< Mean of the object's points.
   EdgeNeighbour before_first = EdgeNeighbour::kFieldOfViewEnd;  ///< Beyond first_beam.
   EdgeNeighbour after_last = EdgeNeighbour::kFieldOfViewEnd;    ///< Beyond last_beam.
 

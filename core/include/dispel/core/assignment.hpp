@@ -1,0 +1,14 @@
+#pragma once
+/// @file
+/// Minimum-cost assignment (the Hungarian method), used to match objects to tracks.
+
+#include <vector>
+
+namespace dispel {
+
+/// Solves the square assignment problem: picks one column per row, each column once, so that the
+/// sum of cost[row * n + column] is smallest. Costs must be finite; forbid a pair by giving it a
+/// cost larger than any sum of allowed ones. Returns the column of each row. O(n^3) time.
+std::vector<int> min_cost_assignment(const std::vector<double>& cost, int n);
+
+}  // namespace dispel

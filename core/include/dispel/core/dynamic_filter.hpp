@@ -1,0 +1,208 @@
+#pragma once
+/// @file
+/// The dynamic object filter (thesis sections 3.2.1-3.2.4): segments each scan, follows the
+/// objects from scan to scan in a fixed frame, estimates their velocity and removes the beams of
+/// moving objects before SLAM sees the scan.
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "dispel/core/classification.hpp"
+#include "dispel/core/laser_scan.hpp"
+#include "dispel/core/pose2.hpp"
+#include "dispel/core/segmentation.hpp"
+#include "dispel/core/velocity_filter.hpp"
+
+namespace dispel {
+
+/// How objects of a new scan are matched to remembered tracks.
+enum class Matching {
+  /// The thesis's: each object takes the nearest track (by its last seen centroid) within D;
+  /// pairs are taken closest first, each track once.
+  kNearestNeighbour,
+  /// Minimum total cost over all objects and tracks at once (Hungarian method), comparing the
+  /// object's edges and centroid with the track's, predicted to the scan's time by their
+  /// velocities; gated by D on the centroid. Keeps identities when people pass each other.
+  kGlobal,
+};
+
+/// Parameters of the tracking.
+struct TrackingConfig {
+  /// D: an object matches a track only when their centroids are at most this far apart. Under
+  /// global matching D holds per nominal scan period (velocity.nominal_scan_period_s) and the
+  /// gate widens in proportion when a track was last seen longer ago.
+  double match_distance_m = 0.25;
+  Matching matching = Matching::kGlobal;
+  /// A track not matched for more scans than this is forgotten.
+  int max_missed_scans = 10;
+  /// An object that matches no track but lies within D of a track seen in this scan (a person
+  /// whose legs split apart, a wall cut by a walker's shadow) starts its track with that track's
+  /// class, weights and velocity instead of from scratch.
+  bool inherit_on_split = true;
+
+  /// Throws std::invalid_argument naming the first bad field and its value.
+  void validate() const;
+};
+
+/// Everything the filter needs. Defaults are the thesis's (Appendix A).
+struct DynamicFilterConfig {
+  SegmentationConfig segmentation;
+  TrackingConfig tracking;
+  VelocityFilterConfig velocity;
+  ClassificationConfig classification;
+  /// A larger gap between two scans resets the tracks (they can no longer be followed).
+  double max_time_gap_s = 1.0;
+  /// A larger change of the sensor pose between two consecutive scans is a jump of the fixed
+  /// frame (odometry reset, relocalisation), not motion: the tracks are reset.
+  double max_pose_jump_m = 0.5;
+  double max_pose_jump_rad = 0.5;
+
+  /// Validates every component; throws std::invalid_argument naming the field.
+  void validate() const;
+};
+
+/// Per-beam labels of the filtered scan (DESIGN.md, "Beam codes").
+enum class BeamLabel : std::uint8_t {
+  kStatic = 0,    ///< Part of a static object: kept.
+  kDynamic = 1,   ///< Part of a dynamic object: removed (NaN).
+  kUnknown = 2,   ///< Part of an object not yet classified (POG only): removed (NaN).
+  kNoObject = 3,  ///< Valid beam in no object (noise below N_min): kept.
+  kInvalid = 4,   ///< Invalid range or masked sector: untouched.
+};
+
+/// What the filter did with one scan.
+enum class FilterEvent : std::uint8_t {
+  kFiltered,            ///< Tracked and filtered normally.
+  kFirstScan,           ///< Filtered; no earlier scan, so no velocities yet.
+  kRejectedScan,        ///< The scan failed check_scan(): passed through unchanged.
+  kRejectedPose,        ///< The pose has NaN or infinite values: passed through unchanged.
+  kRepeatedStamp,       ///< Same stamp as the previous scan: labelled from the tracks as they
+                        ///< are, without updating them.
+  kResetTimeBackwards,  ///< The stamp is earlier than the previous one: tracks reset.
+  kResetTimeGap,        ///< More than max_time_gap_s since the previous scan: tracks reset.
+  kResetPoseJump,       ///< The sensor pose jumped: tracks reset.
+};
+inline constexpr std::size_t kFilterEventCount = 8;
+
+/// Stable short name of an event, e.g. "reset_time_backwards" (for counters and JSON keys).
+const char* filter_event_name(FilterEvent event);
+
+/// Running totals since the filter was made.
+struct FilterCounters {
+  std::int64_t scans = 0;                                         ///< Scans given to process().
+  std::array<std::int64_t, kFilterEventCount> events{};           ///< Scans per FilterEvent.
+  std::array<std::int64_t, kScanIssueCount> rejected_by_issue{};  ///< kRejectedScan by reason.
+  std::int64_t tracks_created = 0;
+  std::int64_t tracks_dropped = 0;  ///< Forgotten after max_missed_scans, or by a reset.
+  std::int64_t beams_removed_dynamic = 0;
+  std::int64_t beams_removed_unknown = 0;
+};
+
+/// A tracked object as reported to the caller. Positions and velocities are in the fixed frame.
+struct TrackedObject {
+  std::uint64_t id = 0;  ///< Unique for the life of the filter; 1, 2, ...
+  ObjectClass object_class = ObjectClass::kStatic;
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();    ///< Centroid estimate.
+  Eigen::Vector2d velocity_mps = Eigen::Vector2d::Zero();  ///< Centroid velocity estimate.
+  Eigen::Vector2d first_edge_m = Eigen::Vector2d::Zero();  ///< First edge point estimate.
+  Eigen::Vector2d last_edge_m = Eigen::Vector2d::Zero();   ///< Last edge point estimate.
+  double speed_mps = 0.0;  ///< Lowest of the three points' speeds (what is compared with L_v).
+  std::int32_t dynamic_weight = 0;
+  std::int32_t static_weight = 0;
+  std::int32_t age_scans = 0;     ///< Scans since the track started.
+  std::int32_t missed_scans = 0;  ///< Consecutive scans without a match (0 when seen now).
+  /// Index into this scan's Segmentation::objects, or -1 when not seen in this scan.
+  std::int32_t object_index = -1;
+};
+
+/// The result of filtering one scan.
+struct FilterResult {
+  FilterEvent event = FilterEvent::kFiltered;
+  /// The input scan with removed beams set to NaN (REP 117); unchanged when rejected.
+  LaserScan filtered;
+  /// One label per beam (empty only when the scan has no beams).
+  std::vector<BeamLabel> labels;
+  /// Every live track after this scan.
+  std::vector<TrackedObject> tracks;
+  /// The segmentation of this scan (empty when rejected).
+  Segmentation segmentation;
+  /// Beams removed in this scan.
+  std::int32_t removed_dynamic = 0;
+  std::int32_t removed_unknown = 0;
+};
+
+/// The dynamic object filter. Feed it scans in time order with the pose of the sensor in a fixed
+/// frame (e.g. odom) at each scan's time. Bad input never throws: it is rejected or causes a
+/// reset, and FilterResult::event and counters() say which. Not thread-safe.
+class DynamicFilter {
+ public:
+  /// @throws std::invalid_argument if config.validate() does.
+  explicit DynamicFilter(DynamicFilterConfig config);
+
+  /// Filters one scan. @p sensor_pose is the laser frame in the fixed frame at scan.stamp_s.
+  void process(const LaserScan& scan, const Pose2& sensor_pose, FilterResult& out);
+
+  FilterResult process(const LaserScan& scan, const Pose2& sensor_pose) {
+    FilterResult out;
+    process(scan, sensor_pose, out);
+    return out;
+  }
+
+  /// Forgets every track (as after a jump in time or pose).
+  void reset();
+
+  const DynamicFilterConfig& config() const { return config_; }
+  const FilterCounters& counters() const { return counters_; }
+  std::size_t track_count() const { return tracks_.size(); }
+
+ private:
+  // The three tracked points of an object: first edge, last edge, centroid.
+  static constexpr int kFirst = 0, kLast = 1, kCentroid = 2;
+
+  struct Observation {  // One segmented object, in the fixed frame.
+    std::array<Eigen::Vector2d, 3> points;
+    std::array<bool, 3> trusted;
+    bool ambiguous;  // Touches the field-of-view end or a masked sector.
+    double extent_m;
+    std::int32_t point_count;
+  };
+  struct Track {
+    std::uint64_t id;
+    std::array<PointVelocityFilter, 3> kf;
+    ClassState cls;
+    double last_seen_s;
+    std::int32_t age_scans;
+    std::int32_t missed_scans;
+    std::int32_t point_count;
+    double speed_mps;
+    std::int32_t object_index;
+  };
+
+  void pass_through(const LaserScan& scan, FilterEvent event, FilterResult& out);
+  void associate(double stamp_s, std::vector<std::int32_t>& track_of_object);
+  void associate_nearest(std::vector<std::int32_t>& track_of_object);
+  void associate_global(double stamp_s, std::vector<std::int32_t>& track_of_object);
+  void update_track(Track& track, const Observation& obs, double stamp_s);
+  Track new_track(const Observation& obs, double stamp_s, std::int32_t object_index);
+  void write_output(FilterResult& out);
+
+  DynamicFilterConfig config_;
+  Segmenter segmenter_;
+  FilterCounters counters_;
+  std::vector<Track> tracks_;
+  std::uint64_t next_id_ = 1;
+  bool have_previous_ = false;
+  double previous_stamp_s_ = 0.0;
+  Pose2 previous_pose_;
+
+  // Scratch reused between scans.
+  std::vector<Observation> observations_;
+  std::vector<std::int32_t> track_of_object_;
+  std::vector<std::int32_t> object_class_label_;
+  std::vector<double> cost_;
+  std::vector<std::int32_t> component_;
+};
+
+}  // namespace dispel

@@ -1,0 +1,503 @@
+#include "dispel/core/dynamic_filter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+#include "dispel/core/assignment.hpp"
+
+namespace dispel {
+namespace {
+
+[[noreturn]] void reject(const std::string& field, double value, const char* rule) {
+  std::ostringstream out;
+  out << field << " must be " << rule << ", got " << value;
+  throw std::invalid_argument(out.str());
+}
+
+bool finite_pose(const Pose2& p) {
+  return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.yaw_rad);
+}
+
+// Whether an edge is the object's own outline (thesis section 3.2.2 and Figure 3.6).
+bool edge_trusted(EdgeNeighbour n) {
+  return n == EdgeNeighbour::kFarther || n == EdgeNeighbour::kInvalid;
+}
+
+bool edge_at_view_limit(EdgeNeighbour n) {
+  return n == EdgeNeighbour::kFieldOfViewEnd || n == EdgeNeighbour::kMaskedSector;
+}
+
+// Find with path halving, for grouping objects and tracks that compete for each other.
+std::int32_t find_root(std::vector<std::int32_t>& parent, std::int32_t i) {
+  while (parent[i] != i) {
+    parent[i] = parent[parent[i]];
+    i = parent[i];
+  }
+  return i;
+}
+
+}  // namespace
+
+const char* filter_event_name(FilterEvent event) {
+  switch (event) {
+    case FilterEvent::kFiltered:
+      return "filtered";
+    case FilterEvent::kFirstScan:
+      return "first_scan";
+    case FilterEvent::kRejectedScan:
+      return "rejected_scan";
+    case FilterEvent::kRejectedPose:
+      return "rejected_pose";
+    case FilterEvent::kRepeatedStamp:
+      return "repeated_stamp";
+    case FilterEvent::kResetTimeBackwards:
+      return "reset_time_backwards";
+    case FilterEvent::kResetTimeGap:
+      return "reset_time_gap";
+    case FilterEvent::kResetPoseJump:
+      return "reset_pose_jump";
+  }
+  return "unknown";
+}
+
+void TrackingConfig::validate() const {
+  if (!std::isfinite(match_distance_m) || !(match_distance_m > 0.0)) {
+    reject("tracking.match_distance_m", match_distance_m, "a finite number > 0");
+  }
+  if (matching != Matching::kGlobal && matching != Matching::kNearestNeighbour) {
+    reject("tracking.matching", static_cast<int>(matching), "global or nearest_neighbour");
+  }
+  if (max_missed_scans < 0) reject("tracking.max_missed_scans", max_missed_scans, ">= 0");
+}
+
+void DynamicFilterConfig::validate() const {
+  segmentation.validate();
+  tracking.validate();
+  velocity.validate();
+  classification.validate();
+  if (!(max_time_gap_s > 0.0)) reject("max_time_gap_s", max_time_gap_s, "> 0");
+  if (!(max_pose_jump_m > 0.0)) reject("max_pose_jump_m", max_pose_jump_m, "> 0");
+  if (!(max_pose_jump_rad > 0.0)) reject("max_pose_jump_rad", max_pose_jump_rad, "> 0");
+}
+
+DynamicFilter::DynamicFilter(DynamicFilterConfig config)
+    : config_((config.validate(), std::move(config))), segmenter_(config_.segmentation) {}
+
+void DynamicFilter::reset() {
+  counters_.tracks_dropped += static_cast<std::int64_t>(tracks_.size());
+  tracks_.clear();
+  have_previous_ = false;
+}
+
+void DynamicFilter::pass_through(const LaserScan& scan, FilterEvent event, FilterResult& out) {
+  out.event = event;
+  out.filtered = scan;
+  out.segmentation = Segmentation{};
+  out.segmentation.issue = check_scan(scan);
+  const bool usable_limits = out.segmentation.issue == ScanIssue::kNone;
+  out.labels.resize(scan.size());
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    out.labels[i] = usable_limits && scan.is_valid(i) ? BeamLabel::kNoObject : BeamLabel::kInvalid;
+  }
+  for (Track& t : tracks_) t.object_index = -1;
+  object_class_label_.clear();
+  write_output(out);
+  ++counters_.events[static_cast<std::size_t>(event)];
+}
+
+void DynamicFilter::process(const LaserScan& scan, const Pose2& sensor_pose, FilterResult& out) {
+  ++counters_.scans;
+  out.removed_dynamic = out.removed_unknown = 0;
+  const ScanIssue issue = check_scan(scan);
+  if (issue != ScanIssue::kNone) {
+    ++counters_.rejected_by_issue[static_cast<std::size_t>(issue)];
+    pass_through(scan, FilterEvent::kRejectedScan, out);
+    return;
+  }
+  if (!finite_pose(sensor_pose)) {
+    pass_through(scan, FilterEvent::kRejectedPose, out);
+    return;
+  }
+
+  FilterEvent event = FilterEvent::kFiltered;
+  bool update = true;
+  if (!have_previous_) {
+    event = FilterEvent::kFirstScan;
+  } else {
+    const double dt = scan.stamp_s - previous_stamp_s_;
+    const double moved = (sensor_pose.translation() - previous_pose_.translation()).norm();
+    const double turned = std::abs(wrap_angle(sensor_pose.yaw_rad - previous_pose_.yaw_rad));
+    if (dt < 0.0) {
+      reset();
+      event = FilterEvent::kResetTimeBackwards;
+    } else if (dt == 0.0) {
+      event = FilterEvent::kRepeatedStamp;
+      update = false;
+    } else if (dt > config_.max_time_gap_s) {
+      reset();
+      event = FilterEvent::kResetTimeGap;
+    } else if (moved > config_.max_pose_jump_m || turned > config_.max_pose_jump_rad) {
+      reset();
+      event = FilterEvent::kResetPoseJump;
+    }
+  }
+
+  // Segment, and move each object's three points into the fixed frame.
+  segmenter_.segment(scan, out.segmentation);
+  const std::vector<ScanObject>& objects = out.segmentation.objects;
+  observations_.resize(objects.size());
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const ScanObject& o = objects[i];
+    Observation& obs = observations_[i];
+    obs.points[kFirst] = sensor_pose.apply(o.first_point_m);
+    obs.points[kLast] = sensor_pose.apply(o.last_point_m);
+    obs.points[kCentroid] = sensor_pose.apply(o.centroid_m);
+    obs.trusted[kFirst] = edge_trusted(o.before_first);
+    obs.trusted[kLast] = edge_trusted(o.after_last);
+    // A hidden part of the outline shifts the centroid as well.
+    obs.trusted[kCentroid] = obs.trusted[kFirst] && obs.trusted[kLast];
+    obs.ambiguous = edge_at_view_limit(o.before_first) || edge_at_view_limit(o.after_last);
+    obs.extent_m = (o.last_point_m - o.first_point_m).norm();
+    obs.point_count = o.point_count;
+  }
+
+  associate(scan.stamp_s, track_of_object_);
+
+  // The class each object is labelled with.
+  object_class_label_.resize(objects.size());
+  const ClassState fresh = initial_class_state(config_.classification);
+  if (update) {
+    // Find the parents of split objects before the tracks move on.
+    std::vector<std::int32_t> parent(objects.size(), -1);
+    if (config_.tracking.inherit_on_split) {
+      std::vector<char> seen(tracks_.size(), 0);
+      for (std::int32_t t : track_of_object_) {
+        if (t >= 0) seen[t] = 1;
+      }
+      const double d_max = config_.tracking.match_distance_m;
+      for (std::size_t i = 0; i < objects.size(); ++i) {
+        if (track_of_object_[i] >= 0) continue;
+        double best = d_max;
+        for (std::size_t t = 0; t < tracks_.size(); ++t) {
+          if (!seen[t]) continue;  // Only a track seen in this scan can have split.
+          const double dt = scan.stamp_s - tracks_[t].last_seen_s;
+          for (int k = 0; k < 3; ++k) {
+            if (!observations_[i].trusted[k] && k != kCentroid) continue;
+            const double d =
+                (observations_[i].points[k] - tracks_[t].kf[k].predicted_position(dt)).norm();
+            if (d <= best) {
+              best = d;
+              parent[i] = static_cast<std::int32_t>(t);
+            }
+          }
+        }
+      }
+    }
+    for (Track& t : tracks_) t.object_index = -1;
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+      const std::int32_t t = track_of_object_[i];
+      if (t < 0) continue;
+      update_track(tracks_[t], observations_[i], scan.stamp_s);
+      tracks_[t].object_index = static_cast<std::int32_t>(i);
+    }
+    for (Track& t : tracks_) {
+      if (t.object_index < 0) {
+        ++t.missed_scans;
+        ++t.age_scans;
+      }
+    }
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+      if (track_of_object_[i] >= 0) continue;
+      Track track = new_track(observations_[i], scan.stamp_s, static_cast<std::int32_t>(i));
+      if (parent[i] >= 0) {
+        const Track& from = tracks_[parent[i]];
+        track.cls = from.cls;
+        for (PointVelocityFilter& kf : track.kf) kf.set_velocity(from.kf[kCentroid].velocity());
+        track.speed_mps = from.speed_mps;
+      }
+      track_of_object_[i] = static_cast<std::int32_t>(tracks_.size());
+      tracks_.push_back(std::move(track));
+    }
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+      object_class_label_[i] =
+          static_cast<std::int32_t>(tracks_[track_of_object_[i]].cls.object_class);
+    }
+    // Forget tracks unseen for too long (after labelling: indices above stay valid until now).
+    const auto expired = [&](const Track& t) {
+      return t.missed_scans > config_.tracking.max_missed_scans;
+    };
+    const auto before = tracks_.size();
+    tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(), expired), tracks_.end());
+    counters_.tracks_dropped += static_cast<std::int64_t>(before - tracks_.size());
+    previous_stamp_s_ = scan.stamp_s;
+    previous_pose_ = sensor_pose;
+    have_previous_ = true;
+  } else {
+    // Repeated stamp: no time has passed, so nothing can be learned; label from the tracks.
+    for (Track& t : tracks_) t.object_index = -1;
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+      const std::int32_t t = track_of_object_[i];
+      object_class_label_[i] =
+          static_cast<std::int32_t>(t >= 0 ? tracks_[t].cls.object_class : fresh.object_class);
+      if (t >= 0) tracks_[t].object_index = static_cast<std::int32_t>(i);
+    }
+  }
+
+  out.event = event;
+  out.filtered = scan;
+  out.labels.resize(scan.size());
+  const std::vector<std::int32_t>& seg_labels = out.segmentation.beam_labels;
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    const std::int32_t l = seg_labels[b];
+    BeamLabel label = BeamLabel::kInvalid;
+    if (l >= 0) {
+      switch (static_cast<ObjectClass>(object_class_label_[l])) {
+        case ObjectClass::kStatic:
+          label = BeamLabel::kStatic;
+          break;
+        case ObjectClass::kDynamic:
+          label = BeamLabel::kDynamic;
+          ++out.removed_dynamic;
+          out.filtered.ranges_m[b] = std::numeric_limits<float>::quiet_NaN();
+          break;
+        case ObjectClass::kUnknown:
+          label = BeamLabel::kUnknown;
+          ++out.removed_unknown;
+          out.filtered.ranges_m[b] = std::numeric_limits<float>::quiet_NaN();
+          break;
+      }
+    } else if (l == kLabelNoise) {
+      label = BeamLabel::kNoObject;
+    }
+    out.labels[b] = label;
+  }
+  counters_.beams_removed_dynamic += out.removed_dynamic;
+  counters_.beams_removed_unknown += out.removed_unknown;
+  write_output(out);
+  ++counters_.events[static_cast<std::size_t>(event)];
+}
+
+void DynamicFilter::associate(double stamp_s, std::vector<std::int32_t>& track_of_object) {
+  track_of_object.assign(observations_.size(), -1);
+  if (tracks_.empty() || observations_.empty()) return;
+  if (config_.tracking.matching == Matching::kNearestNeighbour) {
+    associate_nearest(track_of_object);
+  } else {
+    associate_global(stamp_s, track_of_object);
+  }
+}
+
+// The thesis's matching: centroid to the track's last seen centroid, nearest pairs first.
+void DynamicFilter::associate_nearest(std::vector<std::int32_t>& track_of_object) {
+  const double d_max = config_.tracking.match_distance_m;
+  struct Pair {
+    double d;
+    std::int32_t object, track;
+  };
+  std::vector<Pair> pairs;
+  for (std::size_t i = 0; i < observations_.size(); ++i) {
+    for (std::size_t t = 0; t < tracks_.size(); ++t) {
+      const double d =
+          (observations_[i].points[kCentroid] - tracks_[t].kf[kCentroid].position()).norm();
+      if (d <= d_max) {
+        pairs.push_back({d, static_cast<std::int32_t>(i), static_cast<std::int32_t>(t)});
+      }
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.d < b.d; });
+  std::vector<char> track_taken(tracks_.size(), 0);
+  for (const Pair& p : pairs) {
+    if (track_of_object[p.object] >= 0 || track_taken[p.track]) continue;
+    track_of_object[p.object] = p.track;
+    track_taken[p.track] = 1;
+  }
+}
+
+// Global matching: gate on the predicted centroid, cost = mean distance of the three points
+// (an untrusted edge counts with the centroid's distance), solved exactly per group of objects
+// and tracks that compete (most groups are one object and one track).
+void DynamicFilter::associate_global(double stamp_s, std::vector<std::int32_t>& track_of_object) {
+  const double d_max = config_.tracking.match_distance_m;
+  const auto n_obj = static_cast<std::int32_t>(observations_.size());
+  const auto n_trk = static_cast<std::int32_t>(tracks_.size());
+  struct Pair {
+    std::int32_t object, track;
+    double cost;
+  };
+  std::vector<Pair> pairs;
+  component_.resize(n_obj + n_trk);
+  std::iota(component_.begin(), component_.end(), 0);
+  std::vector<std::array<Eigen::Vector2d, 3>> predicted(n_trk);
+  for (std::int32_t t = 0; t < n_trk; ++t) {
+    const double dt = stamp_s - tracks_[t].last_seen_s;
+    for (int k = 0; k < 3; ++k) predicted[t][k] = tracks_[t].kf[k].predicted_position(dt);
+  }
+  std::vector<double> gate(n_trk);
+  for (std::int32_t t = 0; t < n_trk; ++t) {
+    const double dt = stamp_s - tracks_[t].last_seen_s;
+    gate[t] = d_max * std::max(1.0, dt / config_.velocity.nominal_scan_period_s);
+  }
+  for (std::int32_t i = 0; i < n_obj; ++i) {
+    const Observation& obs = observations_[i];
+    for (std::int32_t t = 0; t < n_trk; ++t) {
+      const double dc = (obs.points[kCentroid] - predicted[t][kCentroid]).norm();
+      if (dc > gate[t]) continue;
+      double cost = dc;
+      for (int k : {kFirst, kLast}) {
+        cost += obs.trusted[k] ? (obs.points[k] - predicted[t][k]).norm() : dc;
+      }
+      pairs.push_back({i, t, cost / 3.0});
+      const std::int32_t a = find_root(component_, i);
+      const std::int32_t b = find_root(component_, n_obj + t);
+      if (a != b) component_[a] = b;
+    }
+  }
+  if (pairs.empty()) return;
+  // Group pairs by component; solve each group.
+  std::sort(pairs.begin(), pairs.end(), [&](const Pair& a, const Pair& b) {
+    return find_root(component_, a.object) < find_root(component_, b.object);
+  });
+  // Leaving an object unmatched costs more than any gated pair, so every object that can be matched
+  // is; among the ways to do so the cheapest wins.
+  const double unmatched_cost = 2.0 * *std::max_element(gate.begin(), gate.end());
+  const double forbidden = 1e6;
+  std::vector<std::int32_t> objs;
+  std::vector<std::int32_t> trks;
+  for (std::size_t begin = 0; begin < pairs.size();) {
+    const std::int32_t root = find_root(component_, pairs[begin].object);
+    std::size_t end = begin;
+    while (end < pairs.size() && find_root(component_, pairs[end].object) == root) ++end;
+    if (end - begin == 1) {  // One object, one track, no competition.
+      track_of_object[pairs[begin].object] = pairs[begin].track;
+      begin = end;
+      continue;
+    }
+    objs.clear();
+    trks.clear();
+    for (std::size_t p = begin; p < end; ++p) {
+      objs.push_back(pairs[p].object);
+      trks.push_back(pairs[p].track);
+    }
+    std::sort(objs.begin(), objs.end());
+    objs.erase(std::unique(objs.begin(), objs.end()), objs.end());
+    std::sort(trks.begin(), trks.end());
+    trks.erase(std::unique(trks.begin(), trks.end()), trks.end());
+    // Rows: objects then one dummy row per track (track unmatched, cost 0); columns: tracks then
+    // one dummy column per object (object unmatched, cost unmatched_cost).
+    const auto no = static_cast<int>(objs.size());
+    const auto nt = static_cast<int>(trks.size());
+    const int n = no + nt;
+    cost_.assign(static_cast<std::size_t>(n) * n, 0.0);
+    for (int r = 0; r < no; ++r) {
+      for (int c = 0; c < n; ++c) cost_[r * n + c] = c < nt ? forbidden : unmatched_cost;
+    }
+    for (std::size_t p = begin; p < end; ++p) {
+      const int r = static_cast<int>(std::lower_bound(objs.begin(), objs.end(), pairs[p].object) -
+                                     objs.begin());
+      const int c = static_cast<int>(std::lower_bound(trks.begin(), trks.end(), pairs[p].track) -
+                                     trks.begin());
+      cost_[r * n + c] = pairs[p].cost;
+    }
+    const std::vector<int> col = min_cost_assignment(cost_, n);
+    for (int r = 0; r < no; ++r) {
+      if (col[r] < nt && cost_[r * n + col[r]] < forbidden) track_of_object[objs[r]] = trks[col[r]];
+    }
+    begin = end;
+  }
+}
+
+void DynamicFilter::update_track(Track& track, const Observation& obs, double stamp_s) {
+  const double dt = stamp_s - track.last_seen_s;
+  // At the field-of-view end or a masked sector the whole object is ambiguous: its apparent motion
+  // may be it entering or leaving the view, so its velocity decays (thesis 3.2.2). An edge hidden
+  // behind something nearer (and the centroid with it) holds its velocity instead, and its position
+  // follows the measurement: the occluder's motion is not learned, a walker passing behind another
+  // keeps its motion, and a wall whose visible part changes stays where it is seen.
+  for (int k = 0; k < 3; ++k) {
+    if (obs.ambiguous) {
+      track.kf[k].predict_and_decay(obs.points[k], dt, config_.velocity);
+    } else if (!obs.trusted[k]) {
+      track.kf[k].predict_and_hold(obs.points[k], dt, config_.velocity);
+    } else {
+      track.kf[k].predict_and_update(obs.points[k], dt, config_.velocity);
+    }
+  }
+  // Speed is the lowest of the three points' speeds (thesis 3.2.4).
+  std::array<Eigen::Vector2d, 3> v;
+  double speed = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    v[k] = track.kf[k].velocity();
+    speed = std::min(speed, v[k].norm());
+  }
+  const ClassificationConfig& cc = config_.classification;
+  const double ratio =
+      static_cast<double>(std::max(obs.point_count, track.point_count)) /
+      static_cast<double>(std::max(1, std::min(obs.point_count, track.point_count)));
+  MotionEvidence evidence = MotionEvidence::kFast;
+  if (ratio > cc.max_point_count_ratio) {
+    evidence = MotionEvidence::kNone;  // Size jump: merge, split or occlusion.
+  } else if (speed <= cc.speed_limit_mps) {
+    evidence = MotionEvidence::kSlow;
+  } else if (obs.ambiguous || obs.extent_m > cc.max_dynamic_extent_m) {
+    evidence = MotionEvidence::kNone;
+  } else {
+    const double cos_limit = std::cos(cc.max_direction_difference_rad);
+    for (int a = 0; a < 3 && evidence == MotionEvidence::kFast; ++a) {
+      for (int b = a + 1; b < 3; ++b) {
+        if (v[a].dot(v[b]) < cos_limit * v[a].norm() * v[b].norm()) {
+          evidence = MotionEvidence::kNone;  // The points disagree: not a rigid motion.
+          break;
+        }
+      }
+    }
+  }
+  track.cls = update_class_state(track.cls, evidence, cc);
+  track.speed_mps = speed;
+  track.point_count = obs.point_count;
+  track.last_seen_s = stamp_s;
+  track.missed_scans = 0;
+  ++track.age_scans;
+}
+
+DynamicFilter::Track DynamicFilter::new_track(const Observation& obs, double stamp_s,
+                                              std::int32_t object_index) {
+  Track t;
+  t.id = next_id_++;
+  for (int k = 0; k < 3; ++k) t.kf[k] = PointVelocityFilter(obs.points[k], config_.velocity);
+  t.cls = initial_class_state(config_.classification);
+  t.last_seen_s = stamp_s;
+  t.age_scans = 1;
+  t.missed_scans = 0;
+  t.point_count = obs.point_count;
+  t.speed_mps = 0.0;
+  t.object_index = object_index;
+  ++counters_.tracks_created;
+  return t;
+}
+
+void DynamicFilter::write_output(FilterResult& out) {
+  out.tracks.resize(tracks_.size());
+  for (std::size_t i = 0; i < tracks_.size(); ++i) {
+    const Track& t = tracks_[i];
+    TrackedObject& o = out.tracks[i];
+    o.id = t.id;
+    o.object_class = t.cls.object_class;
+    o.position_m = t.kf[kCentroid].position();
+    o.velocity_mps = t.kf[kCentroid].velocity();
+    o.first_edge_m = t.kf[kFirst].position();
+    o.last_edge_m = t.kf[kLast].position();
+    o.speed_mps = t.speed_mps;
+    o.dynamic_weight = t.cls.dynamic_weight;
+    o.static_weight = t.cls.static_weight;
+    o.age_scans = t.age_scans;
+    o.missed_scans = t.missed_scans;
+    o.object_index = t.object_index;
+  }
+}
+
+}  // namespace dispel

@@ -107,6 +107,17 @@ void print_summary(const std::vector<Result>& results) {
     std::printf("at 11000 beams segmentation is %.0fx faster than grid-indexed DBSCAN\n",
                 grid_small->median_ns / seg_small->median_ns);
   }
+  const Result* filter_thesis = find(results, "filter_pipeline", 1617);
+  const Result* filter_100k = find(results, "filter_pipeline", 100000);
+  const Result* filter_11k = find(results, "filter_pipeline", 11000);
+  if (filter_thesis != nullptr) {
+    std::printf("whole filter per 1617-beam scan: %.2f us median\n",
+                filter_thesis->median_ns / 1e3);
+  }
+  if (filter_11k != nullptr && filter_100k != nullptr) {
+    std::printf("filter time from 11000 to 100000 beams grows %.2fx (linear: 9.1x)\n",
+                filter_100k->median_ns / filter_11k->median_ns);
+  }
   if (seg_100k != nullptr && seg_1m != nullptr) {
     std::printf("segmentation time from 100000 to 1000000 beams grows %.2fx (linear: 10x)\n",
                 seg_1m->median_ns / seg_100k->median_ns);

@@ -7,6 +7,7 @@
 #include <random>
 #include <string>
 
+#include "dispel/core/dynamic_filter.hpp"
 #include "dispel/core/pose2.hpp"
 #include "dispel/core/reference_dbscan.hpp"
 #include "dispel/core/segmentation.hpp"
@@ -49,6 +50,28 @@ sim::World hall() {
 
 }  // namespace
 
+std::vector<LaserScan> hall_sequence(std::int32_t beams, int frames) {
+  // The hall's people walk back and forth (one period over the sequence), so that the sequence
+  // can be replayed in a loop without anyone jumping.
+  const sim::World base = hall();
+  std::vector<sim::Circle> legs(base.circles.end() - 16, base.circles.end());
+  const double fov = 275.0 * kDeg;
+  const sim::ScanGeometry geometry{-fov / 2.0, fov / (beams - 1), beams, 0.05F, 40.0F};
+  std::vector<LaserScan> out;
+  for (int f = 0; f < frames; ++f) {
+    const double phase = 2.0 * kPi * f / frames;
+    sim::World world = base;
+    world.circles.resize(world.circles.size() - legs.size());
+    for (std::size_t l = 0; l < legs.size(); ++l) {
+      const double heading = 0.7 * static_cast<double>(l / 2);  // Both legs of a person alike.
+      const Eigen::Vector2d dir(std::cos(heading), std::sin(heading));
+      world.circles.push_back({legs[l].center + 1.5 * std::sin(phase) * dir, legs[l].radius_m});
+    }
+    out.push_back(sim::raycast(world, Pose2{}, geometry));
+  }
+  return out;
+}
+
 LaserScan hall_scan(std::int32_t beams) {
   const double fov = 275.0 * kDeg;
   const sim::ScanGeometry geometry{-fov / 2.0, fov / (beams - 1), beams, 0.05F, 40.0F};
@@ -85,6 +108,34 @@ void segmentation(benchmark::State& state) {
   state.counters["objects"] = static_cast<double>(out.objects.size());
 }
 
+// The whole filter on a stream of scans: segmentation, tracking, classification, output.
+void filter_pipeline(benchmark::State& state) {
+  static std::map<std::int32_t, std::vector<LaserScan>> cache;
+  const auto beams = static_cast<std::int32_t>(state.range(0));
+  auto it = cache.find(beams);
+  if (it == cache.end()) it = cache.emplace(beams, hall_sequence(beams, 100)).first;
+  std::vector<LaserScan>& frames = it->second;
+  DynamicFilter filter{DynamicFilterConfig{}};
+  FilterResult out;
+  double stamp = 0.0;
+  std::size_t k = 0;
+  std::size_t objects = 0;
+  for (std::size_t warm = 0; warm < frames.size(); ++warm, ++k) {  // Tracks settle first.
+    frames[k % frames.size()].stamp_s = stamp += 0.05;
+    filter.process(frames[k % frames.size()], Pose2{}, out);
+  }
+  for (auto _ : state) {
+    LaserScan& scan = frames[k++ % frames.size()];
+    scan.stamp_s = stamp += 0.05;
+    filter.process(scan, Pose2{}, out);
+    objects += out.segmentation.objects.size();
+    benchmark::DoNotOptimize(out.labels.data());
+  }
+  state.counters["beams"] = beams;
+  state.counters["objects"] =
+      static_cast<double>(objects) / static_cast<double>(state.iterations());
+}
+
 template <NeighbourSearch kSearch>
 void dbscan(benchmark::State& state) {
   const LaserScan& scan = cached_scan(static_cast<std::int32_t>(state.range(0)));
@@ -114,6 +165,10 @@ void register_benchmarks(const RunSettings& settings) {
                 ->Arg(11000)
                 ->Arg(100000)
                 ->Arg(1000000));
+  configure(benchmark::RegisterBenchmark("filter_pipeline", filter_pipeline)
+                ->Arg(1617)
+                ->Arg(11000)
+                ->Arg(100000));
   configure(benchmark::RegisterBenchmark("reference_dbscan", dbscan<NeighbourSearch::kBruteForce>)
                 ->Arg(1617)
                 ->Arg(11000));

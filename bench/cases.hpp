@@ -3,6 +3,7 @@
 // `dispel bench`: one definition of what is measured, two ways to run it.
 
 #include <cstdint>
+#include <vector>
 
 #include "dispel/core/laser_scan.hpp"
 
@@ -13,6 +14,9 @@ namespace dispel::bench {
 /// the same for every size, so time per beam is comparable across sizes.
 LaserScan hall_scan(std::int32_t beams);
 
+/// @p frames scans of the same hall in which the people walk back and forth, for the filter.
+std::vector<LaserScan> hall_sequence(std::int32_t beams, int frames);
+
 /// How many times each case is repeated and for how long at least (seconds per repetition).
 struct RunSettings {
   int repetitions = 5;
@@ -20,8 +24,8 @@ struct RunSettings {
 };
 
 /// Registers every case with Google Benchmark. Names are "<algorithm>/<beams>", algorithm one of
-/// segmentation, reference_dbscan (brute force) and reference_dbscan_grid. Each run sets the
-/// counter "beams".
+/// segmentation, filter_pipeline (the whole dynamic filter per scan), reference_dbscan (brute
+/// force) and reference_dbscan_grid. Each run sets the counter "beams".
 void register_benchmarks(const RunSettings& settings);
 
 }  // namespace dispel::bench

@@ -47,6 +47,9 @@ ClassState initial_class_state(const ClassificationConfig& config) {
 ClassState update_class_state(ClassState s, MotionEvidence evidence,
                               const ClassificationConfig& config) {
   if (s.object_class == ObjectClass::kDynamic || evidence == MotionEvidence::kNone) return s;
+  if (evidence == MotionEvidence::kSlow && config.slow_scans_reduce_dynamic_weight) {
+    s.dynamic_weight = std::max(0, s.dynamic_weight - 1);
+  }
   if (config.presumption == Presumption::kInnocence) {
     if (evidence == MotionEvidence::kFast && ++s.dynamic_weight > config.dynamic_weight_limit) {
       s.object_class = ObjectClass::kDynamic;

@@ -8,7 +8,8 @@ namespace dispel {
 namespace {
 
 TEST(Classification, InnocenceStartsStaticAndTurnsDynamicPastTheLimitForGood) {
-  const ClassificationConfig config;  // L_d = 18.
+  ClassificationConfig config;                      // L_d = 18.
+  config.slow_scans_reduce_dynamic_weight = false;  // The thesis's rule.
   ClassState s = initial_class_state(config);
   EXPECT_EQ(s.object_class, ObjectClass::kStatic);
   for (int k = 1; k <= config.dynamic_weight_limit; ++k) {
@@ -21,6 +22,22 @@ TEST(Classification, InnocenceStartsStaticAndTurnsDynamicPastTheLimitForGood) {
   s = update_class_state(s, MotionEvidence::kFast, config);
   EXPECT_EQ(s.object_class, ObjectClass::kDynamic);
   for (int k = 0; k < 500; ++k) s = update_class_state(s, MotionEvidence::kSlow, config);
+  EXPECT_EQ(s.object_class, ObjectClass::kDynamic);
+}
+
+TEST(Classification, SlowScansTakeDynamicWeightAwaySoNoiseCannotAddUp) {
+  const ClassificationConfig config;  // The default: slow scans reduce the dynamic weight.
+  ClassState s = initial_class_state(config);
+  // One fast scan in three, for minutes: a noisy wall. It never becomes dynamic.
+  for (int k = 0; k < 3000; ++k) {
+    s = update_class_state(s, k % 3 == 0 ? MotionEvidence::kFast : MotionEvidence::kSlow, config);
+  }
+  EXPECT_EQ(s.object_class, ObjectClass::kStatic);
+  EXPECT_LE(s.dynamic_weight, 1);
+  // A walker: L_d + 1 fast scans in a row.
+  for (int k = 0; k <= config.dynamic_weight_limit; ++k) {
+    s = update_class_state(s, MotionEvidence::kFast, config);
+  }
   EXPECT_EQ(s.object_class, ObjectClass::kDynamic);
 }
 

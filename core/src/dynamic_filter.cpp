@@ -73,6 +73,12 @@ void TrackingConfig::validate() const {
     reject("tracking.matching", static_cast<int>(matching), "global or nearest_neighbour");
   }
   if (max_missed_scans < 0) reject("tracking.max_missed_scans", max_missed_scans, ">= 0");
+  if (!std::isfinite(max_gate_m) || max_gate_m < match_distance_m) {
+    reject("tracking.max_gate_m", max_gate_m, "finite and >= match_distance_m");
+  }
+  if (!(max_extent_change_m > 0.0)) {
+    reject("tracking.max_extent_change_m", max_extent_change_m, "> 0");
+  }
 }
 
 void DynamicFilterConfig::validate() const {
@@ -83,6 +89,27 @@ void DynamicFilterConfig::validate() const {
   if (!(max_time_gap_s > 0.0)) reject("max_time_gap_s", max_time_gap_s, "> 0");
   if (!(max_pose_jump_m > 0.0)) reject("max_pose_jump_m", max_pose_jump_m, "> 0");
   if (!(max_pose_jump_rad > 0.0)) reject("max_pose_jump_rad", max_pose_jump_rad, "> 0");
+}
+
+DynamicFilterConfig scale_to_scanner(DynamicFilterConfig config, double angle_increment_rad,
+                                     double scan_period_s) {
+  if (!std::isfinite(angle_increment_rad) || !(angle_increment_rad > 0.0)) {
+    reject("angle_increment_rad", angle_increment_rad, "a finite number > 0");
+  }
+  if (!std::isfinite(scan_period_s) || !(scan_period_s > 0.0)) {
+    reject("scan_period_s", scan_period_s, "a finite number > 0");
+  }
+  constexpr double kThesisIncrementRad = 275.0 / 1616.0 * kPi / 180.0;
+  constexpr double kThesisPeriodS = 0.05;
+  const double beams = kThesisIncrementRad / angle_increment_rad;
+  const double scans = kThesisPeriodS / scan_period_s;
+  ClassificationConfig& c = config.classification;
+  config.segmentation.min_points =
+      std::max(3, static_cast<int>(std::lround(config.segmentation.min_points * beams)));
+  c.dynamic_weight_limit =
+      std::max(1, static_cast<int>(std::lround(c.dynamic_weight_limit * scans)));
+  c.static_weight_limit = std::max(1, static_cast<int>(std::lround(c.static_weight_limit * scans)));
+  return config;
 }
 
 DynamicFilter::DynamicFilter(DynamicFilterConfig config)
@@ -289,6 +316,51 @@ void DynamicFilter::associate(double stamp_s, std::vector<std::int32_t>& track_o
     associate_nearest(track_of_object);
   } else {
     associate_global(stamp_s, track_of_object);
+    rescue_by_edges(stamp_s, track_of_object);
+  }
+}
+
+// Second chance for objects the global matching left alone: a surface that reappears from behind
+// an occluder, or shrinks to a fragment, may have moved its centroid far while one of its edges
+// stayed put. Such an object continues an unmatched track when one of its reliable edges lies
+// within D of the same edge of the track (predicted), nearest pairs first.
+void DynamicFilter::rescue_by_edges(double stamp_s, std::vector<std::int32_t>& track_of_object) {
+  const double d_max = config_.tracking.match_distance_m;
+  std::vector<char> taken(tracks_.size(), 0);
+  for (std::int32_t t : track_of_object) {
+    if (t >= 0) taken[t] = 1;
+  }
+  struct Pair {
+    double d;
+    std::int32_t object, track;
+  };
+  std::vector<Pair> pairs;
+  for (std::size_t i = 0; i < observations_.size(); ++i) {
+    if (track_of_object[i] >= 0) continue;
+    const Observation& obs = observations_[i];
+    for (std::size_t t = 0; t < tracks_.size(); ++t) {
+      if (taken[t]) continue;
+      const Track& track = tracks_[t];
+      const double dt = stamp_s - track.last_seen_s;
+      double best = d_max;
+      bool found = false;
+      for (int k : {kFirst, kLast}) {
+        if (!obs.trusted[k] || !track.trusted[k] || obs.ambiguous) continue;
+        const double d = (obs.points[k] - track.kf[k].predicted_position(dt)).norm();
+        if (d <= best) {
+          best = d;
+          found = true;
+        }
+      }
+      if (found)
+        pairs.push_back({best, static_cast<std::int32_t>(i), static_cast<std::int32_t>(t)});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.d < b.d; });
+  for (const Pair& p : pairs) {
+    if (track_of_object[p.object] >= 0 || taken[p.track]) continue;
+    track_of_object[p.object] = p.track;
+    taken[p.track] = 1;
   }
 }
 
@@ -340,13 +412,19 @@ void DynamicFilter::associate_global(double stamp_s, std::vector<std::int32_t>& 
   std::vector<double> gate(n_trk);
   for (std::int32_t t = 0; t < n_trk; ++t) {
     const double dt = stamp_s - tracks_[t].last_seen_s;
-    gate[t] = d_max * std::max(1.0, dt / config_.velocity.nominal_scan_period_s);
+    const double scaled = d_max * dt / config_.velocity.nominal_scan_period_s;
+    gate[t] = std::max(d_max, std::min(scaled, config_.tracking.max_gate_m));
   }
   for (std::int32_t i = 0; i < n_obj; ++i) {
     const Observation& obs = observations_[i];
     for (std::int32_t t = 0; t < n_trk; ++t) {
       const double dc = (obs.points[kCentroid] - predicted[t][kCentroid]).norm();
       if (dc > gate[t]) continue;
+      const double extent_change = std::abs(obs.extent_m - tracks_[t].extent_m);
+      if (extent_change > std::max(config_.tracking.max_extent_change_m,
+                                   0.5 * std::max(obs.extent_m, tracks_[t].extent_m))) {
+        continue;
+      }
       double cost = dc;
       for (int k : {kFirst, kLast}) {
         cost += obs.trusted[k] ? (obs.points[k] - predicted[t][k]).norm() : dc;
@@ -417,15 +495,19 @@ void DynamicFilter::update_track(Track& track, const Observation& obs, double st
   // may be it entering or leaving the view, so its velocity decays (thesis 3.2.2). An edge hidden
   // behind something nearer (and the centroid with it) holds its velocity instead, and its position
   // follows the measurement: the occluder's motion is not learned, a walker passing behind another
-  // keeps its motion, and a wall whose visible part changes stays where it is seen.
+  // keeps its motion, and a wall whose visible part changes stays where it is seen. The first scan
+  // in which such a point is trusted again re-anchors it the same way, so that the jump back to
+  // the true outline is not taken for motion either.
   for (int k = 0; k < 3; ++k) {
+    PointVelocityFilter& kf = track.kf[k];
     if (obs.ambiguous) {
-      track.kf[k].predict_and_decay(obs.points[k], dt, config_.velocity);
-    } else if (!obs.trusted[k]) {
-      track.kf[k].predict_and_hold(obs.points[k], dt, config_.velocity);
+      kf.predict_and_decay(obs.points[k], dt, config_.velocity);
+    } else if (!obs.trusted[k] || !track.trusted[k]) {
+      kf.predict_and_hold(obs.points[k], dt, config_.velocity);
     } else {
-      track.kf[k].predict_and_update(obs.points[k], dt, config_.velocity);
+      kf.predict_and_update(obs.points[k], dt, config_.velocity);
     }
+    track.trusted[k] = obs.trusted[k] && !obs.ambiguous;
   }
   // Speed is the lowest of the three points' speeds (thesis 3.2.4).
   std::array<Eigen::Vector2d, 3> v;
@@ -439,10 +521,10 @@ void DynamicFilter::update_track(Track& track, const Observation& obs, double st
       static_cast<double>(std::max(obs.point_count, track.point_count)) /
       static_cast<double>(std::max(1, std::min(obs.point_count, track.point_count)));
   MotionEvidence evidence = MotionEvidence::kFast;
-  if (ratio > cc.max_point_count_ratio) {
-    evidence = MotionEvidence::kNone;  // Size jump: merge, split or occlusion.
-  } else if (speed <= cc.speed_limit_mps) {
+  if (speed <= cc.speed_limit_mps) {
     evidence = MotionEvidence::kSlow;
+  } else if (ratio > cc.max_point_count_ratio) {
+    evidence = MotionEvidence::kNone;  // Size jump (merge, split, occlusion): motion unreliable.
   } else if (obs.ambiguous || obs.extent_m > cc.max_dynamic_extent_m) {
     evidence = MotionEvidence::kNone;
   } else {
@@ -459,6 +541,7 @@ void DynamicFilter::update_track(Track& track, const Observation& obs, double st
   track.cls = update_class_state(track.cls, evidence, cc);
   track.speed_mps = speed;
   track.point_count = obs.point_count;
+  track.extent_m = obs.extent_m;
   track.last_seen_s = stamp_s;
   track.missed_scans = 0;
   ++track.age_scans;
@@ -468,12 +551,16 @@ DynamicFilter::Track DynamicFilter::new_track(const Observation& obs, double sta
                                               std::int32_t object_index) {
   Track t;
   t.id = next_id_++;
-  for (int k = 0; k < 3; ++k) t.kf[k] = PointVelocityFilter(obs.points[k], config_.velocity);
+  for (int k = 0; k < 3; ++k) {
+    t.kf[k] = PointVelocityFilter(obs.points[k], config_.velocity);
+    t.trusted[k] = obs.trusted[k] && !obs.ambiguous;
+  }
   t.cls = initial_class_state(config_.classification);
   t.last_seen_s = stamp_s;
   t.age_scans = 1;
   t.missed_scans = 0;
   t.point_count = obs.point_count;
+  t.extent_m = obs.extent_m;
   t.speed_mps = 0.0;
   t.object_index = object_index;
   ++counters_.tracks_created;

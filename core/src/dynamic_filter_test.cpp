@@ -442,6 +442,104 @@ TEST(DynamicFilter, TracksOfVanishedObjectsExpireAndTrackCountStaysBounded) {
   EXPECT_EQ(single.track_count(), 0u);
 }
 
+// --- Recorded data ------------------------------------------------------------------------------
+
+struct RecordedScore {
+  double preservation;  // Background beams kept / background beams.
+  double rejection;     // Foreground beams removed / foreground beams.
+  std::int64_t background = 0, foreground = 0;
+};
+
+// leg_tracker: a stationary scanner (10 Hz, 512 beams, 5.6 m) in a room with people walking.
+// Without labels, a beam's background range is the 90th percentile of its valid ranges over the
+// 40 s: a beam within 10 cm of it sees the room; one more than 30 cm in front of it sees a person.
+RecordedScore score_recorded(const DynamicFilterConfig& config) {
+  const auto scans = testing::read_scan_csv(testing::data_path("leg_tracker/scans_250_to_650.csv"));
+  const std::size_t n = scans.front().size();
+  std::vector<float> background(n, std::numeric_limits<float>::infinity());
+  for (std::size_t i = 0; i < n; ++i) {
+    std::vector<float> v;
+    for (const LaserScan& s : scans) {
+      if (s.is_valid(i)) v.push_back(s.ranges_m[i]);
+    }
+    if (v.size() < scans.size() / 2) continue;
+    std::nth_element(v.begin(), v.begin() + v.size() * 9 / 10, v.end());
+    background[i] = v[v.size() * 9 / 10];
+  }
+  DynamicFilter filter{config};
+  RecordedScore score{};
+  std::int64_t kept = 0, removed_fg = 0;
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    const FilterResult r = filter.process(scans[k], Pose2{});
+    EXPECT_EQ(r.event, k == 0 ? FilterEvent::kFirstScan : FilterEvent::kFiltered);
+    if (k < 30) continue;  // Let the tracks settle (3 s).
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!scans[k].is_valid(i) || !std::isfinite(background[i])) continue;
+      const float d = scans[k].ranges_m[i] - background[i];
+      if (std::abs(d) < 0.1F) {
+        ++score.background;
+        kept += removed(r.labels[i]) ? 0 : 1;
+      } else if (d < -0.3F) {
+        ++score.foreground;
+        removed_fg += removed(r.labels[i]) ? 1 : 0;
+      }
+    }
+  }
+  score.preservation = static_cast<double>(kept) / static_cast<double>(score.background);
+  score.rejection = static_cast<double>(removed_fg) / static_cast<double>(score.foreground);
+  return score;
+}
+
+TEST(DynamicFilterOnRecordedScans, RemovesWalkersAndKeepsTheRoom) {
+  // The thesis's parameters carried over to this scanner (0.35 deg, 10 Hz): N_min 4, L_d 9, L_s 25.
+  const LaserScan first =
+      testing::read_scan_csv(testing::data_path("leg_tracker/scans_250_to_650.csv")).front();
+  const DynamicFilterConfig poi_config =
+      scale_to_scanner(DynamicFilterConfig{}, first.angle_increment_rad, 0.1);
+  ASSERT_EQ(poi_config.segmentation.min_points, 4);
+  ASSERT_EQ(poi_config.classification.dynamic_weight_limit, 9);
+  ASSERT_EQ(poi_config.classification.static_weight_limit, 25);
+  const RecordedScore poi = score_recorded(poi_config);
+  RecordProperty("poi_preservation", std::to_string(poi.preservation));
+  RecordProperty("poi_rejection", std::to_string(poi.rejection));
+  ASSERT_GT(poi.background, 50000);
+  ASSERT_GT(poi.foreground, 4000);
+  EXPECT_GE(poi.preservation, 0.99);  // Measured 0.998.
+  EXPECT_GE(poi.rejection, 0.80);     // Measured 0.878.
+
+  DynamicFilterConfig pog_config = poi_config;
+  pog_config.classification.presumption = Presumption::kGuilt;
+  const RecordedScore pog = score_recorded(pog_config);
+  RecordProperty("pog_preservation", std::to_string(pog.preservation));
+  RecordProperty("pog_rejection", std::to_string(pog.rejection));
+  // Guilt removes more people and, until proven static, more of the room.
+  EXPECT_GE(pog.rejection, 0.90);     // Measured 0.940.
+  EXPECT_GE(pog.preservation, 0.80);  // Measured 0.873.
+  EXPECT_GT(pog.rejection, poi.rejection);
+}
+
+TEST(DynamicFilterOnRecordedScans, ThesisCountsOnACoarserSlowerScannerMissMostWalkers) {
+  // Unscaled, N_min = 8 beams is wider than a leg beyond about 2.5 m on this scanner, and 18 scans
+  // at 10 Hz take 1.8 s: the room is kept but few walkers are removed. Hence scale_to_scanner().
+  const RecordedScore raw = score_recorded(DynamicFilterConfig{});
+  EXPECT_GE(raw.preservation, 0.99);
+  EXPECT_LT(raw.rejection, 0.5);  // Measured 0.18.
+}
+
+TEST(ScaleToScanner, KeepsTheThesisScannerAndRejectsBadArguments) {
+  const DynamicFilterConfig same =
+      scale_to_scanner(DynamicFilterConfig{}, 275.0 / 1616.0 * kDeg, 0.05);
+  EXPECT_EQ(same.segmentation.min_points, 8);
+  EXPECT_EQ(same.classification.dynamic_weight_limit, 18);
+  EXPECT_EQ(same.classification.static_weight_limit, 50);
+  const DynamicFilterConfig fine =
+      scale_to_scanner(DynamicFilterConfig{}, 0.25 * kDeg / 3.0, 0.025);
+  EXPECT_EQ(fine.segmentation.min_points, 16);
+  EXPECT_EQ(fine.classification.dynamic_weight_limit, 36);
+  EXPECT_THROW(scale_to_scanner(DynamicFilterConfig{}, 0.0, 0.05), std::invalid_argument);
+  EXPECT_THROW(scale_to_scanner(DynamicFilterConfig{}, 0.01, -1.0), std::invalid_argument);
+}
+
 // --- Bad input ----------------------------------------------------------------------------------
 
 void expect_sane(const FilterResult& r, const LaserScan& in) {

@@ -37,6 +37,10 @@ struct ClassificationConfig {
   /// Objects whose edge points are farther apart than this never gain dynamic weight (walls,
   /// racks). 3 m lets a forklift seen from the side through.
   double max_dynamic_extent_m = 3.0;
+  /// Each slow scan takes one from the dynamic weight (not below 0) until the object is dynamic.
+  /// The thesis only adds; with this on (the default) measurement noise that now and then pushes
+  /// a wall over L_v cannot add up over minutes to make the wall dynamic.
+  bool slow_scans_reduce_dynamic_weight = true;
   /// A scan where the object's point count changed by more than this factor since the last scan
   /// gives no evidence (a merge, a split, or an occlusion starting).
   double max_point_count_ratio = 1.5;

@@ -30,10 +30,16 @@ enum class Matching {
 
 /// Parameters of the tracking.
 struct TrackingConfig {
-  /// D: an object matches a track only when their centroids are at most this far apart. Under
-  /// global matching D holds per nominal scan period (velocity.nominal_scan_period_s) and the
-  /// gate widens in proportion when a track was last seen longer ago.
+  /// D: an object matches a track only when their centroids are at most this far apart.
   double match_distance_m = 0.25;
+  /// Global matching only: D holds for one nominal scan period (velocity.nominal_scan_period_s);
+  /// for a track last seen dt ago the gate is D * dt / period, up to this many metres, for the
+  /// motion its velocity estimate does not know yet (a 10 Hz scanner, missed scans).
+  double max_gate_m = 1.0;
+  /// Global matching only: an object and a track whose extents (distance between the edge points)
+  /// differ by more than this (metres, or half the larger extent if more) never match, so that a
+  /// person's track does not take over a piece of wall.
+  double max_extent_change_m = 0.5;
   Matching matching = Matching::kGlobal;
   /// A track not matched for more scans than this is forgotten.
   int max_missed_scans = 10;
@@ -62,6 +68,14 @@ struct DynamicFilterConfig {
   /// Validates every component; throws std::invalid_argument naming the field.
   void validate() const;
 };
+
+/// The thesis's parameters were chosen for its scanner: 0.17 degrees between beams, 20 Hz. Returns
+/// @p config with the counts that depend on the scanner carried over to another one: N_min in
+/// proportion to the beams an object of a given width covers (at least 3), and the weight limits
+/// L_d and L_s in proportion to the scans in the same time (at least 1). Distances, speeds and
+/// variances are physical and stay. Throws std::invalid_argument on a non-positive argument.
+DynamicFilterConfig scale_to_scanner(DynamicFilterConfig config, double angle_increment_rad,
+                                     double scan_period_s);
 
 /// Per-beam labels of the filtered scan (DESIGN.md, "Beam codes").
 enum class BeamLabel : std::uint8_t {
@@ -171,11 +185,13 @@ class DynamicFilter {
   struct Track {
     std::uint64_t id;
     std::array<PointVelocityFilter, 3> kf;
+    std::array<bool, 3> trusted;  // Whether each point was measured reliably in the last scan.
     ClassState cls;
     double last_seen_s;
     std::int32_t age_scans;
     std::int32_t missed_scans;
     std::int32_t point_count;
+    double extent_m;
     double speed_mps;
     std::int32_t object_index;
   };
@@ -184,6 +200,7 @@ class DynamicFilter {
   void associate(double stamp_s, std::vector<std::int32_t>& track_of_object);
   void associate_nearest(std::vector<std::int32_t>& track_of_object);
   void associate_global(double stamp_s, std::vector<std::int32_t>& track_of_object);
+  void rescue_by_edges(double stamp_s, std::vector<std::int32_t>& track_of_object);
   void update_track(Track& track, const Observation& obs, double stamp_s);
   Track new_track(const Observation& obs, double stamp_s, std::int32_t object_index);
   void write_output(FilterResult& out);

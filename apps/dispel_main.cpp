@@ -4,6 +4,9 @@
 #include <iostream>
 
 #include "bench_command.hpp"
+#ifdef DISPEL_HAVE_IO
+#include "filter_command.hpp"
+#endif
 
 #ifndef DISPEL_VERSION
 #define DISPEL_VERSION "unknown"
@@ -30,6 +33,28 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.001, 60.0))
       ->capture_default_str();
 
+#ifdef DISPEL_HAVE_IO
+  dispel::apps::FilterCommandOptions filter;
+  std::string config_path;
+  CLI::App* filter_cmd = app.add_subcommand(
+      "filter", "Remove moving objects from the scans of a recording (ROS 1 bag or CARMEN log)");
+  filter_cmd->add_option("input", filter.job.input, "IN.bag, or a CARMEN .log/.clf")->required();
+  filter_cmd->add_option("-o,--output", filter.job.output, "OUT.bag to write")->required();
+  filter_cmd->add_option("--config", config_path, "YAML configuration (see config/default.yaml)");
+  filter_cmd->add_option("--scan-topic", filter.job.scan_topic, "LaserScan topic")
+      ->capture_default_str();
+  filter_cmd->add_option("--odom-topic", filter.job.odom_topic, "Odometry topic")
+      ->capture_default_str();
+  filter_cmd->add_flag("--static-sensor", filter.job.static_sensor,
+                       "The sensor does not move (no odometry needed)");
+  filter_cmd->add_flag("--scale-to-scanner", filter.job.scale_to_scanner,
+                       "Carry N_min, L_d and L_s over from the thesis's scanner to this one");
+  filter_cmd->add_option("--stats", filter.stats_path, "Write statistics as JSON here");
+  filter_cmd->add_option("--compression", filter.compression, "Output bag compression")
+      ->check(CLI::IsMember({"none", "bz2", "lz4"}))
+      ->capture_default_str();
+#endif
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -37,6 +62,12 @@ int main(int argc, char** argv) {
   }
   try {
     if (*bench_cmd) return dispel::apps::run_bench(bench);
+#ifdef DISPEL_HAVE_IO
+    if (*filter_cmd) {
+      if (!config_path.empty()) filter.job.config_path = config_path;
+      return dispel::apps::run_filter(filter);
+    }
+#endif
   } catch (const std::exception& e) {
     std::cerr << "dispel: " << e.what() << "\n";
     return 1;

@@ -32,6 +32,7 @@ void ClassificationConfig::validate() const {
   if (!(max_dynamic_extent_m > 0.0)) {
     reject("max_dynamic_extent_m", max_dynamic_extent_m, "> 0");
   }
+  if (still_scans_to_static < 0) reject("still_scans_to_static", still_scans_to_static, ">= 0");
   if (!(max_point_count_ratio >= 1.0)) {
     reject("max_point_count_ratio", max_point_count_ratio, ">= 1");
   }
@@ -46,7 +47,15 @@ ClassState initial_class_state(const ClassificationConfig& config) {
 
 ClassState update_class_state(ClassState s, MotionEvidence evidence,
                               const ClassificationConfig& config) {
-  if (s.object_class == ObjectClass::kDynamic || evidence == MotionEvidence::kNone) return s;
+  if (s.object_class == ObjectClass::kDynamic) {
+    if (evidence == MotionEvidence::kFast) s.still_scans = 0;
+    if (evidence == MotionEvidence::kSlow && config.still_scans_to_static > 0 &&
+        ++s.still_scans >= config.still_scans_to_static) {
+      s = ClassState{};  // Static, with its weights starting afresh.
+    }
+    return s;
+  }
+  if (evidence == MotionEvidence::kNone) return s;
   if (evidence == MotionEvidence::kSlow && config.slow_scans_reduce_dynamic_weight) {
     s.dynamic_weight = std::max(0, s.dynamic_weight - 1);
   }

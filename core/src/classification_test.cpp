@@ -9,7 +9,8 @@ namespace {
 
 TEST(Classification, InnocenceStartsStaticAndTurnsDynamicPastTheLimitForGood) {
   ClassificationConfig config;                      // L_d = 18.
-  config.slow_scans_reduce_dynamic_weight = false;  // The thesis's rule.
+  config.slow_scans_reduce_dynamic_weight = false;  // The thesis's rules.
+  config.still_scans_to_static = 0;
   ClassState s = initial_class_state(config);
   EXPECT_EQ(s.object_class, ObjectClass::kStatic);
   for (int k = 1; k <= config.dynamic_weight_limit; ++k) {
@@ -39,6 +40,27 @@ TEST(Classification, SlowScansTakeDynamicWeightAwaySoNoiseCannotAddUp) {
     s = update_class_state(s, MotionEvidence::kFast, config);
   }
   EXPECT_EQ(s.object_class, ObjectClass::kDynamic);
+}
+
+TEST(Classification, ADynamicObjectStillForLongEnoughIsStaticAgain) {
+  const ClassificationConfig config;  // still_scans_to_static = 100.
+  ClassState s = initial_class_state(config);
+  for (int k = 0; k <= config.dynamic_weight_limit; ++k) {
+    s = update_class_state(s, MotionEvidence::kFast, config);
+  }
+  ASSERT_EQ(s.object_class, ObjectClass::kDynamic);
+  const int still = config.still_scans_to_static;
+  for (int k = 1; k < still; ++k) s = update_class_state(s, MotionEvidence::kSlow, config);
+  EXPECT_EQ(s.object_class, ObjectClass::kDynamic);
+  s = update_class_state(s, MotionEvidence::kFast, config);  // It moved: count again.
+  for (int k = 1; k < still; ++k) {
+    s = update_class_state(s, MotionEvidence::kSlow, config);
+    s = update_class_state(s, MotionEvidence::kNone, config);  // No evidence: no change.
+  }
+  EXPECT_EQ(s.object_class, ObjectClass::kDynamic);
+  s = update_class_state(s, MotionEvidence::kSlow, config);
+  EXPECT_EQ(s.object_class, ObjectClass::kStatic);
+  EXPECT_EQ(s.dynamic_weight, 0);
 }
 
 TEST(Classification, GuiltStartsUnknownAndNeedsLsSlowScansToBeStatic) {

@@ -109,6 +109,10 @@ DynamicFilterConfig scale_to_scanner(DynamicFilterConfig config, double angle_in
   c.dynamic_weight_limit =
       std::max(1, static_cast<int>(std::lround(c.dynamic_weight_limit * scans)));
   c.static_weight_limit = std::max(1, static_cast<int>(std::lround(c.static_weight_limit * scans)));
+  if (c.still_scans_to_static > 0) {
+    c.still_scans_to_static =
+        std::max(1, static_cast<int>(std::lround(c.still_scans_to_static * scans)));
+  }
   return config;
 }
 
@@ -211,7 +215,9 @@ void DynamicFilter::process(const LaserScan& scan, const Pose2& sensor_pose, Fil
         if (track_of_object_[i] >= 0) continue;
         double best = d_max;
         for (std::size_t t = 0; t < tracks_.size(); ++t) {
-          if (!seen[t]) continue;  // Only a track seen in this scan can have split.
+          // A track seen in this scan may have split; one unseen for a while may be a static
+          // surface that reappears in pieces.
+          if (!seen[t] && tracks_[t].cls.object_class != ObjectClass::kStatic) continue;
           const double dt = scan.stamp_s - tracks_[t].last_seen_s;
           for (int k = 0; k < 3; ++k) {
             if (!observations_[i].trusted[k] && k != kCentroid) continue;
@@ -309,6 +315,12 @@ void DynamicFilter::process(const LaserScan& scan, const Pose2& sensor_pose, Fil
   ++counters_.events[static_cast<std::size_t>(event)];
 }
 
+bool DynamicFilter::similar_extent(const Observation& obs, const Track& track) const {
+  const double change = std::abs(obs.extent_m - track.extent_m);
+  return change <= std::max(config_.tracking.max_extent_change_m,
+                            0.5 * std::max(obs.extent_m, track.extent_m));
+}
+
 void DynamicFilter::associate(double stamp_s, std::vector<std::int32_t>& track_of_object) {
   track_of_object.assign(observations_.size(), -1);
   if (tracks_.empty() || observations_.empty()) return;
@@ -341,6 +353,7 @@ void DynamicFilter::rescue_by_edges(double stamp_s, std::vector<std::int32_t>& t
     for (std::size_t t = 0; t < tracks_.size(); ++t) {
       if (taken[t]) continue;
       const Track& track = tracks_[t];
+      if (!similar_extent(obs, track)) continue;
       const double dt = stamp_s - track.last_seen_s;
       double best = d_max;
       bool found = false;
@@ -420,11 +433,7 @@ void DynamicFilter::associate_global(double stamp_s, std::vector<std::int32_t>& 
     for (std::int32_t t = 0; t < n_trk; ++t) {
       const double dc = (obs.points[kCentroid] - predicted[t][kCentroid]).norm();
       if (dc > gate[t]) continue;
-      const double extent_change = std::abs(obs.extent_m - tracks_[t].extent_m);
-      if (extent_change > std::max(config_.tracking.max_extent_change_m,
-                                   0.5 * std::max(obs.extent_m, tracks_[t].extent_m))) {
-        continue;
-      }
+      if (!similar_extent(obs, tracks_[t])) continue;
       double cost = dc;
       for (int k : {kFirst, kLast}) {
         cost += obs.trusted[k] ? (obs.points[k] - predicted[t][k]).norm() : dc;
@@ -541,7 +550,9 @@ void DynamicFilter::update_track(Track& track, const Observation& obs, double st
   track.cls = update_class_state(track.cls, evidence, cc);
   track.speed_mps = speed;
   track.point_count = obs.point_count;
-  track.extent_m = obs.extent_m;
+  // A dynamic object keeps the extent it had when it became dynamic: people and vehicles do not
+  // grow, so its track cannot creep onto a wall the person stood next to.
+  if (track.cls.object_class != ObjectClass::kDynamic) track.extent_m = obs.extent_m;
   track.last_seen_s = stamp_s;
   track.missed_scans = 0;
   ++track.age_scans;

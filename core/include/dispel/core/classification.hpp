@@ -41,6 +41,11 @@ struct ClassificationConfig {
   /// The thesis only adds; with this on (the default) measurement noise that now and then pushes
   /// a wall over L_v cannot add up over minutes to make the wall dynamic.
   bool slow_scans_reduce_dynamic_weight = true;
+  /// A dynamic object that has been slow for this many scans in a row is static again (0: never,
+  /// the thesis's "dynamic for good"). It keeps a parked vehicle or a long-waiting person out of
+  /// the scan for a while, and it undoes a dynamic track that has drifted onto a wall. 100 scans
+  /// is 5 s at the thesis's 20 Hz.
+  int still_scans_to_static = 100;
   /// A scan where the object's point count changed by more than this factor since the last scan
   /// gives no evidence (a merge, a split, or an occlusion starting).
   double max_point_count_ratio = 1.5;
@@ -61,6 +66,7 @@ struct ClassState {
   ObjectClass object_class = ObjectClass::kStatic;
   std::int32_t dynamic_weight = 0;
   std::int32_t static_weight = 0;
+  std::int32_t still_scans = 0;  ///< Slow scans in a row while dynamic.
 };
 
 /// The belief about an object seen for the first time.

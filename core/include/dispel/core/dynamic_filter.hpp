@@ -201,6 +201,7 @@ class DynamicFilter {
   void associate_nearest(std::vector<std::int32_t>& track_of_object);
   void associate_global(double stamp_s, std::vector<std::int32_t>& track_of_object);
   void rescue_by_edges(double stamp_s, std::vector<std::int32_t>& track_of_object);
+  bool similar_extent(const Observation& obs, const Track& track) const;
   void update_track(Track& track, const Observation& obs, double stamp_s);
   Track new_track(const Observation& obs, double stamp_s, std::int32_t object_index);
   void write_output(FilterResult& out);

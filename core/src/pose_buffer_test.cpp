@@ -1,0 +1,50 @@
+#include "dispel/core/pose_buffer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace dispel {
+namespace {
+
+TEST(PoseBuffer, InterpolatesPositionAndYawAlongTheShorterArc) {
+  PoseBuffer buffer(0.05, 0.5);
+  ASSERT_TRUE(buffer.add(1.0, {0.0, 0.0, 3.0}));
+  ASSERT_TRUE(buffer.add(1.2, {2.0, -1.0, -3.0}));  // Crosses +-pi: 0.28 rad the short way.
+  Pose2 p;
+  ASSERT_EQ(buffer.lookup(1.05, p), PoseLookup::kOk);
+  EXPECT_NEAR(p.x_m, 0.5, 1e-12);
+  EXPECT_NEAR(p.y_m, -0.25, 1e-12);
+  EXPECT_NEAR(wrap_angle(p.yaw_rad - (3.0 + 0.25 * (2.0 * kPi - 6.0))), 0.0, 1e-12);
+}
+
+TEST(PoseBuffer, NeverExtrapolatesBeyondTheTolerance) {
+  PoseBuffer buffer(0.05, 0.5);
+  buffer.add(1.0, {1.0, 2.0, 0.1});
+  buffer.add(2.0 - 1.6, {0.0, 0.0, 0.0});  // Out of order: refused.
+  buffer.add(1.1, {2.0, 2.0, 0.1});
+  Pose2 p;
+  EXPECT_EQ(buffer.lookup(0.96, p), PoseLookup::kOk);
+  EXPECT_EQ(p.x_m, 1.0);
+  EXPECT_EQ(buffer.lookup(0.9, p), PoseLookup::kBeforeFirst);
+  EXPECT_EQ(buffer.lookup(1.14, p), PoseLookup::kOk);
+  EXPECT_EQ(p.x_m, 2.0);
+  EXPECT_EQ(buffer.lookup(1.2, p), PoseLookup::kAfterLast);
+  EXPECT_EQ(buffer.size(), 2u);
+}
+
+TEST(PoseBuffer, RefusesNonFiniteAndRepeatedStampsAndDoesNotBridgeGaps) {
+  PoseBuffer buffer(0.05, 0.5);
+  Pose2 p;
+  EXPECT_EQ(buffer.lookup(0.0, p), PoseLookup::kEmpty);
+  EXPECT_FALSE(buffer.add(std::nan(""), {}));
+  EXPECT_FALSE(buffer.add(1.0, {std::nan(""), 0.0, 0.0}));
+  EXPECT_TRUE(buffer.add(1.0, {}));
+  EXPECT_FALSE(buffer.add(1.0, {}));
+  EXPECT_TRUE(buffer.add(3.0, {}));
+  EXPECT_EQ(buffer.lookup(2.0, p), PoseLookup::kGap);
+  EXPECT_STREQ(pose_lookup_name(PoseLookup::kGap), "pose_gap");
+}
+
+}  // namespace
+}  // namespace dispel

@@ -1,0 +1,30 @@
+#pragma once
+/// @file
+/// Writing a file so that it appears complete or not at all.
+
+#include <string>
+
+namespace dispel::io {
+
+/// Reserves "<path>.partial" next to @p path for writing. commit() renames it to @p path;
+/// destruction without commit() deletes it. A failure or an interruption never leaves a
+/// half-written file under the final name.
+class AtomicFile {
+ public:
+  explicit AtomicFile(std::string path);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  /// Where to write.
+  const std::string& temp_path() const { return temp_; }
+  /// Moves the finished file into place. @throws std::runtime_error if the rename fails.
+  void commit();
+
+ private:
+  std::string path_;
+  std::string temp_;
+  bool committed_ = false;
+};
+
+}  // namespace dispel::io

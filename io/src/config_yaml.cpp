@@ -1,0 +1,177 @@
+#include "dispel/io/config_yaml.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+
+namespace dispel::io {
+namespace {
+
+using Setter = std::function<void(const YAML::Node&, const std::string& key)>;
+
+[[noreturn]] void fail(const std::string& origin, const std::string& message) {
+  throw ConfigError(origin + ": " + message);
+}
+
+template <typename T>
+T scalar(const YAML::Node& node, const std::string& key, const std::string& origin,
+         const char* kind) {
+  if (!node.IsScalar()) fail(origin, key + " must be " + kind);
+  try {
+    return node.as<T>();
+  } catch (const YAML::Exception&) {
+    fail(origin, key + " must be " + kind + ", got '" + node.Scalar() + "'");
+  }
+}
+
+class Binder {
+ public:
+  explicit Binder(std::string origin) : origin_(std::move(origin)) {}
+
+  void number(const std::string& key, double& field) {
+    setters_[key] = [this, &field](const YAML::Node& n, const std::string& k) {
+      field = scalar<double>(n, k, origin_, "a number");
+    };
+  }
+  void integer(const std::string& key, int& field) {
+    setters_[key] = [this, &field](const YAML::Node& n, const std::string& k) {
+      field = scalar<int>(n, k, origin_, "an integer");
+    };
+  }
+  void boolean(const std::string& key, bool& field) {
+    setters_[key] = [this, &field](const YAML::Node& n, const std::string& k) {
+      field = scalar<bool>(n, k, origin_, "true or false");
+    };
+  }
+  template <typename E>
+  void choice(const std::string& key, E& field, std::map<std::string, E> names) {
+    setters_[key] = [this, &field, names](const YAML::Node& n, const std::string& k) {
+      const auto word = scalar<std::string>(n, k, origin_, "a word");
+      const auto it = names.find(word);
+      if (it == names.end()) {
+        std::string options;
+        for (const auto& [name, value] : names) options += (options.empty() ? "" : ", ") + name;
+        fail(origin_, k + " must be one of " + options + ", got '" + word + "'");
+      }
+      field = it->second;
+    };
+  }
+  void custom(const std::string& key, Setter setter) { setters_[key] = std::move(setter); }
+
+  // Applies a mapping node; every key must be known.
+  void apply(const YAML::Node& map, const std::string& prefix) const {
+    if (!map.IsMap()) fail(origin_, (prefix.empty() ? "the file" : prefix) + " must be a mapping");
+    for (const auto& item : map) {
+      const auto name = item.first.as<std::string>();
+      const std::string key = prefix.empty() ? name : prefix + "." + name;
+      const auto it = setters_.find(key);
+      if (it == setters_.end()) {
+        if (sections_.count(key) != 0) {
+          sections_.at(key)(item.second, key);
+          continue;
+        }
+        fail(origin_, "unknown key '" + key + "'");
+      }
+      if (item.second.IsNull()) fail(origin_, key + " has no value");
+      it->second(item.second, key);
+    }
+  }
+  void section(const std::string& key) {
+    sections_[key] = [this](const YAML::Node& n, const std::string& k) { apply(n, k); };
+  }
+
+ private:
+  std::string origin_;
+  std::map<std::string, Setter> setters_;
+  std::map<std::string, Setter> sections_;
+};
+
+}  // namespace
+
+DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std::string& origin) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    fail(origin, std::string("not valid YAML: ") + e.what());
+  }
+  DynamicFilterConfig c;
+  if (root.IsNull()) {
+    // An empty file: all defaults.
+  } else {
+    Binder b(origin);
+    SegmentationConfig& s = c.segmentation;
+    b.section("segmentation");
+    b.number("segmentation.cluster_gap_m", s.cluster_gap_m);
+    b.integer("segmentation.min_points", s.min_points);
+    b.choice<GapMetric>(
+        "segmentation.gap_metric", s.gap_metric,
+        {{"euclidean", GapMetric::kEuclidean}, {"range_difference", GapMetric::kRangeDifference}});
+    b.boolean("segmentation.merge_facing_edges", s.merge_facing_edges);
+    b.boolean("segmentation.join_full_circle_seam", s.join_full_circle_seam);
+    b.custom("segmentation.masked_sectors", [&](const YAML::Node& n, const std::string& k) {
+      if (!n.IsSequence()) fail(origin, k + " must be a list of [begin_rad, end_rad] pairs");
+      s.masked_sectors.clear();
+      for (std::size_t i = 0; i < n.size(); ++i) {
+        const std::string item = k + "[" + std::to_string(i) + "]";
+        if (!n[i].IsSequence() || n[i].size() != 2)
+          fail(origin, item + " must be [begin_rad, end_rad]");
+        s.masked_sectors.push_back({scalar<double>(n[i][0], item, origin, "a number"),
+                                    scalar<double>(n[i][1], item, origin, "a number")});
+      }
+    });
+    TrackingConfig& t = c.tracking;
+    b.section("tracking");
+    b.number("tracking.match_distance_m", t.match_distance_m);
+    b.choice<Matching>(
+        "tracking.matching", t.matching,
+        {{"global", Matching::kGlobal}, {"nearest_neighbour", Matching::kNearestNeighbour}});
+    b.integer("tracking.max_missed_scans", t.max_missed_scans);
+    b.boolean("tracking.inherit_on_split", t.inherit_on_split);
+    b.number("tracking.max_gate_m", t.max_gate_m);
+    b.number("tracking.max_extent_change_m", t.max_extent_change_m);
+    VelocityFilterConfig& v = c.velocity;
+    b.section("velocity");
+    b.number("velocity.position_variance_m2", v.position_variance_m2);
+    b.number("velocity.velocity_variance_m2ps2", v.velocity_variance_m2ps2);
+    b.number("velocity.measurement_variance_m2", v.measurement_variance_m2);
+    b.number("velocity.velocity_decay", v.velocity_decay);
+    b.number("velocity.nominal_scan_period_s", v.nominal_scan_period_s);
+    ClassificationConfig& k = c.classification;
+    b.section("classification");
+    b.choice<Presumption>("classification.presumption", k.presumption,
+                          {{"innocence", Presumption::kInnocence}, {"guilt", Presumption::kGuilt}});
+    b.number("classification.speed_limit_mps", k.speed_limit_mps);
+    b.integer("classification.dynamic_weight_limit", k.dynamic_weight_limit);
+    b.integer("classification.static_weight_limit", k.static_weight_limit);
+    b.number("classification.max_direction_difference_rad", k.max_direction_difference_rad);
+    b.number("classification.max_dynamic_extent_m", k.max_dynamic_extent_m);
+    b.number("classification.max_point_count_ratio", k.max_point_count_ratio);
+    b.integer("classification.still_scans_to_static", k.still_scans_to_static);
+    b.boolean("classification.slow_scans_reduce_dynamic_weight",
+              k.slow_scans_reduce_dynamic_weight);
+    b.number("max_time_gap_s", c.max_time_gap_s);
+    b.number("max_pose_jump_m", c.max_pose_jump_m);
+    b.number("max_pose_jump_rad", c.max_pose_jump_rad);
+    b.apply(root, "");
+  }
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(origin, e.what());
+  }
+  return c;
+}
+
+DynamicFilterConfig load_filter_config(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot open the configuration file");
+  std::stringstream text;
+  text << in.rdbuf();
+  return parse_filter_config(text.str(), path);
+}
+
+}  // namespace dispel::io

@@ -1,0 +1,94 @@
+#include "dispel/io/config_yaml.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace dispel::io {
+namespace {
+
+std::string default_yaml() { return std::string(DISPEL_SOURCE_DIR) + "/config/default.yaml"; }
+
+void expect_error(const std::string& yaml, const std::string& expected) {
+  try {
+    parse_filter_config(yaml, "test.yaml");
+    ADD_FAILURE() << "accepted: " << yaml;
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("test.yaml: "), std::string::npos) << what;
+    EXPECT_NE(what.find(expected), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << "not one line: " << what;
+  }
+}
+
+TEST(ConfigYaml, ShippedDefaultFileHoldsExactlyTheDefaults) {
+  const DynamicFilterConfig loaded = load_filter_config(default_yaml());
+  const DynamicFilterConfig d;
+  EXPECT_EQ(loaded.segmentation.cluster_gap_m, d.segmentation.cluster_gap_m);
+  EXPECT_EQ(loaded.segmentation.min_points, d.segmentation.min_points);
+  EXPECT_EQ(loaded.segmentation.gap_metric, d.segmentation.gap_metric);
+  EXPECT_EQ(loaded.segmentation.masked_sectors.size(), 0u);
+  EXPECT_EQ(loaded.tracking.match_distance_m, d.tracking.match_distance_m);
+  EXPECT_EQ(loaded.tracking.matching, d.tracking.matching);
+  EXPECT_EQ(loaded.tracking.max_missed_scans, d.tracking.max_missed_scans);
+  EXPECT_EQ(loaded.tracking.max_gate_m, d.tracking.max_gate_m);
+  EXPECT_EQ(loaded.tracking.max_extent_change_m, d.tracking.max_extent_change_m);
+  EXPECT_EQ(loaded.velocity.position_variance_m2, d.velocity.position_variance_m2);
+  EXPECT_EQ(loaded.velocity.velocity_variance_m2ps2, d.velocity.velocity_variance_m2ps2);
+  EXPECT_EQ(loaded.velocity.measurement_variance_m2, d.velocity.measurement_variance_m2);
+  EXPECT_EQ(loaded.velocity.velocity_decay, d.velocity.velocity_decay);
+  EXPECT_EQ(loaded.velocity.nominal_scan_period_s, d.velocity.nominal_scan_period_s);
+  EXPECT_EQ(loaded.classification.presumption, d.classification.presumption);
+  EXPECT_EQ(loaded.classification.speed_limit_mps, d.classification.speed_limit_mps);
+  EXPECT_EQ(loaded.classification.dynamic_weight_limit, d.classification.dynamic_weight_limit);
+  EXPECT_EQ(loaded.classification.static_weight_limit, d.classification.static_weight_limit);
+  EXPECT_DOUBLE_EQ(loaded.classification.max_direction_difference_rad,
+                   d.classification.max_direction_difference_rad);
+  EXPECT_EQ(loaded.classification.max_dynamic_extent_m, d.classification.max_dynamic_extent_m);
+  EXPECT_EQ(loaded.classification.max_point_count_ratio, d.classification.max_point_count_ratio);
+  EXPECT_EQ(loaded.classification.still_scans_to_static, d.classification.still_scans_to_static);
+  EXPECT_EQ(loaded.classification.slow_scans_reduce_dynamic_weight,
+            d.classification.slow_scans_reduce_dynamic_weight);
+  EXPECT_EQ(loaded.max_time_gap_s, d.max_time_gap_s);
+  EXPECT_EQ(loaded.max_pose_jump_m, d.max_pose_jump_m);
+  EXPECT_EQ(loaded.max_pose_jump_rad, d.max_pose_jump_rad);
+}
+
+TEST(ConfigYaml, ValuesAreReadIntoTheirFields) {
+  const DynamicFilterConfig c = parse_filter_config(
+      "segmentation: {cluster_gap_m: 0.2, gap_metric: range_difference,"
+      " masked_sectors: [[-0.5, -0.1], [0.1, 0.5]]}\n"
+      "tracking: {matching: nearest_neighbour}\n"
+      "classification: {presumption: guilt, static_weight_limit: 20}\n"
+      "max_pose_jump_m: 2.0\n",
+      "test.yaml");
+  EXPECT_EQ(c.segmentation.cluster_gap_m, 0.2);
+  EXPECT_EQ(c.segmentation.gap_metric, GapMetric::kRangeDifference);
+  ASSERT_EQ(c.segmentation.masked_sectors.size(), 2u);
+  EXPECT_EQ(c.segmentation.masked_sectors[1].end_rad, 0.5);
+  EXPECT_EQ(c.tracking.matching, Matching::kNearestNeighbour);
+  EXPECT_EQ(c.classification.presumption, Presumption::kGuilt);
+  EXPECT_EQ(c.classification.static_weight_limit, 20);
+  EXPECT_EQ(c.max_pose_jump_m, 2.0);
+  EXPECT_EQ(c.segmentation.min_points, 8);  // Untouched keys keep their defaults.
+  EXPECT_NO_THROW(parse_filter_config("", "empty.yaml"));
+}
+
+TEST(ConfigYaml, UnknownKeysWrongTypesAndBadValuesAreErrorsNamingTheKey) {
+  expect_error("segmentation: {cluster_gapm: 0.1}", "unknown key 'segmentation.cluster_gapm'");
+  expect_error("tracker: {}", "unknown key 'tracker'");
+  expect_error("segmentation: {cluster_gap_m: -0.1}", "segmentation.cluster_gap_m must be");
+  expect_error("segmentation: {min_points: many}", "segmentation.min_points must be an integer");
+  expect_error("tracking: {matching: psychic}", "tracking.matching must be one of");
+  expect_error("classification: {presumption: [1]}", "classification.presumption must be");
+  expect_error("velocity: {velocity_decay: 2}", "velocity.velocity_decay must be in [0, 1]");
+  expect_error("segmentation: {masked_sectors: [[1]]}", "segmentation.masked_sectors[0]");
+  expect_error("segmentation: {masked_sectors: [[0.5, 0.1]]}", "masked_sectors[0] must satisfy");
+  expect_error("segmentation: [1, 2]", "segmentation must be a mapping");
+  expect_error("a: [unclosed", "not valid YAML");
+  expect_error("max_time_gap_s:", "max_time_gap_s has no value");
+  EXPECT_THROW(load_filter_config("/nonexistent/dispel.yaml"), ConfigError);
+}
+
+}  // namespace
+}  // namespace dispel::io

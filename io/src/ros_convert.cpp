@@ -1,0 +1,86 @@
+#include "dispel/io/ros_convert.hpp"
+
+#include <cmath>
+
+namespace dispel::io {
+
+double to_seconds(const ros::Time& t) { return t.toSec(); }
+
+ros::Time to_ros_time(double seconds) {
+  const double whole = std::floor(seconds);
+  auto nsec = static_cast<std::int64_t>(std::llround((seconds - whole) * 1e9));
+  auto sec = static_cast<std::int64_t>(whole);
+  if (nsec >= 1000000000) {
+    nsec -= 1000000000;
+    ++sec;
+  }
+  return ros::Time(static_cast<std::uint32_t>(sec), static_cast<std::uint32_t>(nsec));
+}
+
+LaserScan from_ros(const sensor_msgs::LaserScan& msg) {
+  LaserScan scan;
+  scan.stamp_s = to_seconds(msg.header.stamp);
+  scan.angle_min_rad = msg.angle_min;
+  scan.angle_increment_rad = msg.angle_increment;
+  scan.range_min_m = msg.range_min;
+  scan.range_max_m = msg.range_max;
+  scan.ranges_m = msg.ranges;
+  scan.intensities = msg.intensities;
+  return scan;
+}
+
+sensor_msgs::LaserScan to_ros(const LaserScan& scan, const std::string& frame_id) {
+  sensor_msgs::LaserScan msg;
+  msg.header.stamp = to_ros_time(scan.stamp_s);
+  msg.header.frame_id = frame_id;
+  msg.angle_min = static_cast<float>(scan.angle_min_rad);
+  msg.angle_increment = static_cast<float>(scan.angle_increment_rad);
+  msg.angle_max = static_cast<float>(
+      scan.angle_min_rad +
+      scan.angle_increment_rad * static_cast<double>(scan.size() > 0 ? scan.size() - 1 : 0));
+  msg.range_min = scan.range_min_m;
+  msg.range_max = scan.range_max_m;
+  msg.ranges = scan.ranges_m;
+  msg.intensities = scan.intensities;
+  return msg;
+}
+
+double yaw_of(const geometry_msgs::Quaternion& q) {
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
+geometry_msgs::Quaternion quaternion_from_yaw(double yaw_rad) {
+  geometry_msgs::Quaternion q;
+  q.x = 0.0;
+  q.y = 0.0;
+  q.z = std::sin(0.5 * yaw_rad);
+  q.w = std::cos(0.5 * yaw_rad);
+  return q;
+}
+
+Pose2 from_ros(const geometry_msgs::Transform& t) {
+  return {t.translation.x, t.translation.y, yaw_of(t.rotation)};
+}
+
+Pose2 from_ros(const geometry_msgs::Pose& p) {
+  return {p.position.x, p.position.y, yaw_of(p.orientation)};
+}
+
+sensor_msgs::LaserScan filtered_message(const sensor_msgs::LaserScan& original,
+                                        const FilterResult& result) {
+  sensor_msgs::LaserScan msg = original;
+  if (result.filtered.ranges_m.size() == msg.ranges.size()) msg.ranges = result.filtered.ranges_m;
+  return msg;
+}
+
+sensor_msgs::LaserScan labels_message(const sensor_msgs::LaserScan& original,
+                                      const FilterResult& result) {
+  sensor_msgs::LaserScan msg = original;
+  msg.intensities.assign(msg.ranges.size(), static_cast<float>(BeamLabel::kInvalid));
+  for (std::size_t i = 0; i < msg.ranges.size() && i < result.labels.size(); ++i) {
+    msg.intensities[i] = static_cast<float>(result.labels[i]);
+  }
+  return msg;
+}
+
+}  // namespace dispel::io

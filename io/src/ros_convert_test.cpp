@@ -1,0 +1,57 @@
+#include "dispel/io/ros_convert.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace dispel::io {
+namespace {
+
+TEST(RosConvert, TimeRoundTripsWithinAMicrosecond) {
+  // A double holds epoch seconds to about 0.24 us; the filter's outputs copy the original header,
+  // so their stamps are exact.
+  const ros::Time t(1403201183, 698857000);
+  EXPECT_LT(std::abs((to_ros_time(to_seconds(t)) - t).toSec()), 1e-6);
+  EXPECT_EQ(to_ros_time(12.25), ros::Time(12, 250000000));
+  EXPECT_EQ(to_ros_time(1.9999999999), ros::Time(2, 0));
+}
+
+TEST(RosConvert, YawRoundTripsThroughAQuaternion) {
+  for (double yaw : {0.0, 0.5, -2.0, 3.1, -3.1}) {
+    EXPECT_NEAR(wrap_angle(yaw_of(quaternion_from_yaw(yaw)) - yaw), 0.0, 1e-12);
+  }
+}
+
+TEST(RosConvert, ScanRoundTripsAndFilterOutputKeepsTheHeader) {
+  LaserScan scan;
+  scan.stamp_s = 12.5;
+  scan.angle_min_rad = -1.0;
+  scan.angle_increment_rad = 0.25;
+  scan.range_min_m = 0.1F;
+  scan.range_max_m = 20.0F;
+  scan.ranges_m = {1.0F, 2.0F, 3.0F};
+  scan.intensities = {7.0F, 8.0F, 9.0F};
+  const sensor_msgs::LaserScan msg = to_ros(scan, "laser");
+  EXPECT_EQ(msg.header.frame_id, "laser");
+  EXPECT_FLOAT_EQ(msg.angle_max, -0.5F);
+  const LaserScan back = from_ros(msg);
+  EXPECT_DOUBLE_EQ(back.stamp_s, 12.5);
+  EXPECT_EQ(back.ranges_m, scan.ranges_m);
+  EXPECT_EQ(back.intensities, scan.intensities);
+
+  FilterResult result;
+  result.filtered = scan;
+  result.filtered.ranges_m[1] = std::nanf("");
+  result.labels = {BeamLabel::kStatic, BeamLabel::kDynamic, BeamLabel::kNoObject};
+  const sensor_msgs::LaserScan filtered = filtered_message(msg, result);
+  EXPECT_EQ(filtered.header.frame_id, "laser");
+  EXPECT_EQ(filtered.header.stamp, msg.header.stamp);
+  EXPECT_TRUE(std::isnan(filtered.ranges[1]));
+  EXPECT_EQ(filtered.intensities, msg.intensities);
+  const sensor_msgs::LaserScan labels = labels_message(msg, result);
+  EXPECT_EQ(labels.ranges, msg.ranges);
+  EXPECT_EQ(labels.intensities, (std::vector<float>{0.0F, 1.0F, 3.0F}));
+}
+
+}  // namespace
+}  // namespace dispel::io

@@ -38,3 +38,84 @@ foreach(case "bench;--repetitions;0" "bench;--min-time;-1" "bench;--filter;no_su
   endif()
 endforeach()
 message(STATUS "command-line contract holds")
+
+if(NOT HAVE_IO)
+  return()
+endif()
+
+# dispel filter: bad input gives one line on stderr, a non-zero exit, and no output file.
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+set(out ${WORK_DIR}/out.bag)
+file(WRITE ${WORK_DIR}/not_a_bag.bag "hello\n")
+file(WRITE ${WORK_DIR}/unknown_key.yaml "segmentation:\n  cluster_gapm: 0.1\n")
+file(WRITE ${WORK_DIR}/negative_eps.yaml "segmentation:\n  cluster_gap_m: -0.1\n")
+# The first 1 MB of the real bag: truncated.
+execute_process(COMMAND head -c 1000000 ${BAG} OUTPUT_FILE ${WORK_DIR}/truncated.bag)
+
+function(expect_filter_error expected)
+  file(REMOVE ${out})
+  run_dispel(rc so se filter ${ARGN} -o ${out})
+  if(rc EQUAL 0)
+    message(FATAL_ERROR "'dispel filter ${ARGN}' succeeded; expected: ${expected}")
+  endif()
+  string(STRIP "${se}" line)
+  if(NOT line MATCHES "${expected}" OR line MATCHES "\n")
+    message(FATAL_ERROR "'dispel filter ${ARGN}': expected one line matching '${expected}', got:\n${se}")
+  endif()
+  if(EXISTS ${out} OR EXISTS ${out}.partial)
+    message(FATAL_ERROR "'dispel filter ${ARGN}' left an output file")
+  endif()
+endfunction()
+
+expect_filter_error("No such file" ${WORK_DIR}/missing.bag --static-sensor)
+expect_filter_error("not a readable ROS 1 bag" ${WORK_DIR}/not_a_bag.bag --static-sensor)
+expect_filter_error("truncated.bag" ${WORK_DIR}/truncated.bag --static-sensor)
+expect_filter_error("no sensor_msgs/LaserScan topic /front" ${BAG} --static-sensor --scan-topic /front)
+expect_filter_error("no nav_msgs/Odometry topic /odom" ${BAG})
+expect_filter_error("unknown key 'segmentation.cluster_gapm'" ${BAG} --static-sensor
+                    --config ${WORK_DIR}/unknown_key.yaml)
+expect_filter_error("segmentation.cluster_gap_m must be" ${BAG} --static-sensor
+                    --config ${WORK_DIR}/negative_eps.yaml)
+expect_filter_error("cannot open the configuration file" ${BAG} --static-sensor
+                    --config ${WORK_DIR}/missing.yaml)
+
+# A good run: the bag and the statistics.
+file(REMOVE ${out})
+run_dispel(rc so se filter ${BAG} -o ${out} --static-sensor --scale-to-scanner
+           --stats ${WORK_DIR}/stats.json)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${out})
+  message(FATAL_ERROR "dispel filter failed (${rc}): ${se}")
+endif()
+if(NOT so MATCHES "1265 scans")
+  message(FATAL_ERROR "no summary: ${so}")
+endif()
+file(READ ${WORK_DIR}/stats.json stats)
+string(JSON total GET "${stats}" scans total)
+string(JSON processed GET "${stats}" scans processed)
+string(JSON dynamic GET "${stats}" beams_removed dynamic)
+string(JSON median GET "${stats}" scan_time_us median)
+string(JSON p99 GET "${stats}" scan_time_us p99)
+string(JSON tracks GET "${stats}" tracks_created)
+string(JSON min_points GET "${stats}" config min_points)
+if(NOT total EQUAL 1265 OR NOT processed EQUAL 1265 OR NOT dynamic GREATER 10000
+   OR NOT median GREATER 0 OR p99 LESS median OR NOT tracks GREATER 10 OR NOT min_points EQUAL 4)
+  message(FATAL_ERROR "bad statistics: ${stats}")
+endif()
+
+# Ctrl-C: either interrupted with nothing written, or already done with a complete bag.
+file(REMOVE ${out})
+execute_process(COMMAND timeout --preserve-status -s INT 0.2 ${DISPEL} filter ${BAG} -o ${out} --static-sensor
+                        --compression bz2
+                RESULT_VARIABLE rc OUTPUT_VARIABLE so ERROR_VARIABLE se)
+if(EXISTS ${out}.partial)
+  message(FATAL_ERROR "an interrupted run left ${out}.partial")
+endif()
+if(rc EQUAL 130)
+  if(EXISTS ${out} OR NOT se MATCHES "interrupted")
+    message(FATAL_ERROR "interrupted run: wrote ${out} or said nothing: ${se}")
+  endif()
+elseif(NOT rc EQUAL 0 OR NOT EXISTS ${out})
+  message(FATAL_ERROR "run under SIGINT ended with ${rc}: ${se}")
+endif()
+message(STATUS "dispel filter contract holds (SIGINT run exit ${rc})")

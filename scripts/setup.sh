@@ -8,6 +8,10 @@ packages=(
   libeigen3-dev                        # core
   libcli11-dev nlohmann-json3-dev      # command line, JSON output
   libgtest-dev libbenchmark-dev        # tests, benchmarks
+  libyaml-cpp-dev                      # configuration files
+  librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
+  libtf2-msgs-dev                      # ROS 1 bags (the real bag library, no ROS install needed)
+  python3-rosbag                       # tests: bags we write must read in Python and rosbag info
 )
 
 missing=()

@@ -122,6 +122,22 @@ class ScanProcessor {
   FilterJobStats& stats_;
 };
 
+void open_output(rosbag::Bag& out, const AtomicFile& file, const FilterJobOptions& o) {
+  try {
+    out.open(file.temp_path(), rosbag::bagmode::Write);
+  } catch (const std::exception& e) {
+    throw JobError(o.output + ": cannot write (" + e.what() + ")");
+  }
+  out.setCompression(bag_compression(o.compression));
+}
+
+// The two messages that follow each scan in the output.
+void write_filter_outputs(rosbag::Bag& out, const std::string& scan_topic, const ros::Time& time,
+                          const sensor_msgs::LaserScan& scan, const FilterResult& result) {
+  out.write(scan_topic + "_filtered", time, filtered_message(scan, result));
+  out.write(scan_topic + "_labels", time, labels_message(scan, result));
+}
+
 // ------------------------------------------------------------------------------------------
 // ROS 1 bags.
 
@@ -256,12 +272,7 @@ FilterJobStats run_bag(const FilterJobOptions& o, const Progress& progress,
   AtomicFile output(o.output);
   try {
     rosbag::Bag out;
-    try {
-      out.open(output.temp_path(), rosbag::bagmode::Write);
-    } catch (const std::exception& e) {
-      throw JobError(o.output + ": cannot write (" + e.what() + ")");
-    }
-    out.setCompression(bag_compression(o.compression));
+    open_output(out, output, o);
     rosbag::View all(in);
     const double total = std::max<double>(1.0, static_cast<double>(all.size()));
     for (const rosbag::MessageInstance& m : all) {
@@ -289,8 +300,7 @@ FilterJobStats run_bag(const FilterJobOptions& o, const Progress& progress,
         }
       }
       const FilterResult& result = processor.process(scan, pose, reason);
-      out.write(filtered_topic, m.getTime(), filtered_message(*msg, result));
-      out.write(labels_topic, m.getTime(), labels_message(*msg, result));
+      write_filter_outputs(out, o.scan_topic, m.getTime(), *msg, result);
       stats.messages_out += 2;
     }
     out.close();
@@ -332,12 +342,7 @@ FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
   AtomicFile output(o.output);
   try {
     rosbag::Bag out;
-    try {
-      out.open(output.temp_path(), rosbag::bagmode::Write);
-    } catch (const std::exception& e) {
-      throw JobError(o.output + ": cannot write (" + e.what() + ")");
-    }
-    out.setCompression(bag_compression(o.compression));
+    open_output(out, output, o);
     // Odometry and scans in time order; a stamp that is not finite goes at its file position.
     std::size_t next_odom = 0;
     const auto write_odom_until = [&](double t) {
@@ -367,10 +372,8 @@ FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
           to_ros(cs.scan, cs.kind == "RLASER" ? "rear_laser" : "laser");
       const FilterResult& result =
           processor.process(cs.scan, o.static_sensor ? Pose2{} : cs.laser_pose, "");
-      const std::string topic = o.scan_topic;
-      out.write(topic, msg.header.stamp, msg);
-      out.write(topic + "_filtered", msg.header.stamp, filtered_message(msg, result));
-      out.write(topic + "_labels", msg.header.stamp, labels_message(msg, result));
+      out.write(o.scan_topic, msg.header.stamp, msg);
+      write_filter_outputs(out, o.scan_topic, msg.header.stamp, msg, result);
       stats.messages_out += 3;
       if (progress && i % 64 == 0)
         progress(static_cast<double>(i) / static_cast<double>(log.scans.size()));

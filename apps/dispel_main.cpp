@@ -6,6 +6,7 @@
 #include "bench_command.hpp"
 #ifdef DISPEL_HAVE_IO
 #include "filter_command.hpp"
+#include "sim_commands.hpp"
 #endif
 
 #ifndef DISPEL_VERSION
@@ -53,6 +54,27 @@ int main(int argc, char** argv) {
   filter_cmd->add_option("--compression", filter.compression, "Output bag compression")
       ->check(CLI::IsMember({"none", "bz2", "lz4"}))
       ->capture_default_str();
+
+  dispel::apps::SimOptions sim;
+  CLI::App* sim_cmd =
+      app.add_subcommand("sim", "Simulate a scenario into a bag with ground truth per beam");
+  sim_cmd->add_option("scenario", sim.scenario, "SCENARIO.yaml (see config/scenarios/)")
+      ->required();
+  sim_cmd->add_option("-o,--output", sim.output, "OUT.bag to write")->required();
+  sim_cmd->add_option("--seed", sim.seed, "Random seed (same seed, same bag)")
+      ->capture_default_str();
+  sim_cmd->add_option("--duration", sim.duration_s, "Seconds to simulate (default: the scenario's)")
+      ->check(CLI::PositiveNumber);
+
+  dispel::apps::EvalOptions evaluation;
+  CLI::App* eval_cmd =
+      app.add_subcommand("eval", "Compare a filtered bag with the simulator's ground truth");
+  eval_cmd->add_option("--truth", evaluation.truth, "SIM.bag from dispel sim")->required();
+  eval_cmd->add_option("--result", evaluation.result, "FILTERED.bag from dispel filter")
+      ->required();
+  eval_cmd->add_option("--scan-topic", evaluation.scan_topic, "LaserScan topic")
+      ->capture_default_str();
+  eval_cmd->add_flag("--json", evaluation.json, "Print JSON");
 #endif
 
   try {
@@ -67,6 +89,8 @@ int main(int argc, char** argv) {
       if (!config_path.empty()) filter.job.config_path = config_path;
       return dispel::apps::run_filter(filter);
     }
+    if (*sim_cmd) return dispel::apps::run_sim(sim);
+    if (*eval_cmd) return dispel::apps::run_eval(evaluation);
 #endif
   } catch (const std::exception& e) {
     std::cerr << "dispel: " << e.what() << "\n";

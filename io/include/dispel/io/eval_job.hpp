@@ -1,0 +1,17 @@
+#pragma once
+/// @file
+/// `dispel eval`: compares a filtered bag with the simulator's ground truth.
+
+#include <string>
+
+#include "dispel/eval/beam_evaluation.hpp"
+
+namespace dispel::io {
+
+/// Reads /scan_truth and /scan_truth_actor from @p truth_bag and <scan_topic>_labels (or, when
+/// absent, <scan_topic>_filtered: NaN = removed) from @p result_bag, pairs the scans by stamp,
+/// and evaluates them. @throws JobError (filter_job.hpp) with a one-line message.
+eval::Rates evaluate_bags(const std::string& truth_bag, const std::string& result_bag,
+                          const std::string& scan_topic = "/scan");
+
+}  // namespace dispel::io

@@ -1,0 +1,375 @@
+#include "dispel/sim/simulator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+namespace dispel::sim {
+namespace {
+
+constexpr double kDeg = kPi / 180.0;
+constexpr double kStep = 0.01;  // Physics step, seconds.
+
+[[noreturn]] void reject(const std::string& field, double value, const char* rule) {
+  std::ostringstream out;
+  out << field << " must be " << rule << ", got " << value;
+  throw std::invalid_argument(out.str());
+}
+
+// The path a robot or actor follows: waypoints in order, optionally looping.
+class PathFollower {
+ public:
+  PathFollower(std::vector<Eigen::Vector2d> points, bool loop)
+      : points_(std::move(points)), loop_(loop) {}
+  bool done() const { return points_.empty() || (!loop_ && next_ >= points_.size()); }
+  const Eigen::Vector2d& target() const { return points_[next_ % points_.size()]; }
+  // Moves on when @p position is within @p reach of the target. Returns true on arrival.
+  bool advance_if_reached(const Eigen::Vector2d& position, double reach) {
+    if (done() || (position - target()).norm() > reach) return false;
+    ++next_;
+    if (loop_ && next_ >= points_.size()) next_ = 0;
+    return true;
+  }
+
+ private:
+  std::vector<Eigen::Vector2d> points_;
+  bool loop_;
+  std::size_t next_ = 0;
+};
+
+// Lanes along +x (alternating direction) joined by half circles of diameter lane_spacing.
+std::vector<Eigen::Vector2d> lawnmower_path(const Lawnmower& l) {
+  std::vector<Eigen::Vector2d> p;
+  const double r = 0.5 * l.lane_spacing_m;
+  for (int lane = 0; lane < l.lanes; ++lane) {
+    const double y = l.origin.y() + lane * l.lane_spacing_m;
+    const bool forward = lane % 2 == 0;
+    const double x0 = forward ? l.origin.x() : l.origin.x() + l.lane_length_m;
+    const double x1 = forward ? l.origin.x() + l.lane_length_m : l.origin.x();
+    for (int k = 0; k <= 10; ++k) p.emplace_back(x0 + (x1 - x0) * k / 10.0, y);
+    if (lane + 1 == l.lanes) break;
+    // U-turn around (x1, y + r).
+    for (int k = 1; k < 12; ++k) {
+      const double a = -kPi / 2.0 + kPi * k / 12.0;
+      const double side = forward ? 1.0 : -1.0;
+      p.emplace_back(x1 + side * r * std::cos(a), y + r + r * std::sin(a));
+    }
+  }
+  // Back to the start along the reverse order, so a loop never jumps.
+  const std::size_t n = p.size();
+  for (std::size_t k = n - 1; k-- > 1;) p.push_back(p[k]);
+  return p;
+}
+
+struct ActorState {
+  Actor spec;
+  PathFollower path;
+  Eigen::Vector2d position;
+  double heading = 0.0;
+  double pause_left = 0.0;
+  double delay_left = 0.0;
+  double gait_phase = 0.0;
+  bool moving = false;
+};
+
+// Wheel speeds and IMU from true motion, with the errors of the scenario.
+class OdometrySensors {
+ public:
+  OdometrySensors(const SensorConfig& c, double wheel_base, std::mt19937_64& rng)
+      : c_(c), wheel_base_(wheel_base), rng_(rng) {}
+
+  void measure(double t, double dt, double v, double w, SensorSample& s) {
+    std::normal_distribution<double> n01(0.0, 1.0);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const double left = v - 0.5 * w * wheel_base_;
+    const double right = v + 0.5 * w * wheel_base_;
+    if (slip_left_ <= 0.0 && u(rng_) < c_.slips_per_minute / 60.0 * dt) {
+      slip_left_ = 0.5;
+      slip_wheel_ = u(rng_) < 0.5 ? 0 : 1;
+    }
+    double slip_l = 1.0, slip_r = 1.0;
+    if (slip_left_ > 0.0) {
+      (slip_wheel_ == 0 ? slip_l : slip_r) = 1.3;
+      slip_left_ -= dt;
+    }
+    s.wheel_left_mps = left * (1.0 + c_.wheel_scale_error - c_.wheel_difference_error) * slip_l +
+                       c_.wheel_noise_mps * n01(rng_);
+    s.wheel_right_mps = right * (1.0 + c_.wheel_scale_error + c_.wheel_difference_error) * slip_r +
+                        c_.wheel_noise_mps * n01(rng_);
+    bias_ += c_.imu_bias_walk_radps * std::sqrt(dt) * n01(rng_);
+    s.imu_yaw_rate_radps = w + bias_ + c_.imu_noise_radps * n01(rng_) +
+                           c_.imu_vibration_radps * std::abs(v) * std::sin(2.0 * kPi * 15.0 * t);
+    // Dead reckoning from the measured wheels (exact arc per step).
+    const double vm = 0.5 * (s.wheel_left_mps + s.wheel_right_mps);
+    const double wm = (s.wheel_right_mps - s.wheel_left_mps) / wheel_base_;
+    odom_ = odom_ * Pose2{arc_x(vm, wm, dt), arc_y(vm, wm, dt), wm * dt};
+    s.odom_pose = odom_;
+    s.odom_v_mps = vm;
+    s.odom_w_radps = wm;
+  }
+
+  void start_at(const Pose2& p) { odom_ = p; }
+
+ private:
+  static double arc_x(double v, double w, double dt) {
+    return std::abs(w) < 1e-9 ? v * dt : v / w * std::sin(w * dt);
+  }
+  static double arc_y(double v, double w, double dt) {
+    return std::abs(w) < 1e-9 ? 0.0 : v / w * (1.0 - std::cos(w * dt));
+  }
+
+  SensorConfig c_;
+  double wheel_base_;
+  std::mt19937_64& rng_;
+  double bias_ = 0.0;
+  double slip_left_ = 0.0;
+  int slip_wheel_ = 0;
+  Pose2 odom_;
+};
+
+}  // namespace
+
+void Scenario::validate() const {
+  if (!(duration_s > 0.0)) reject("duration_s", duration_s, "> 0");
+  if (!(start_time_s > 0.0)) reject("start_time_s", start_time_s, "> 0");
+  if (!(robot.wheel_base_m > 0.0)) reject("robot.wheel_base_m", robot.wheel_base_m, "> 0");
+  if (!(robot.speed_mps >= 0.0)) reject("robot.speed_mps", robot.speed_mps, ">= 0");
+  if (!(lidar.range_max_m > 0.0)) reject("lidar.range_max_m", lidar.range_max_m, "> 0");
+  if (!(lidar.fov_deg > 0.0 && lidar.fov_deg <= 360.0))
+    reject("lidar.fov_deg", lidar.fov_deg, "in (0, 360]");
+  if (!(lidar.resolution_deg > 0.0)) reject("lidar.resolution_deg", lidar.resolution_deg, "> 0");
+  if (lidar.fov_deg / lidar.resolution_deg > 2e6) {
+    reject("lidar.resolution_deg", lidar.resolution_deg, "coarse enough for at most 2e6 beams");
+  }
+  if (!(lidar.rate_hz > 0.0 && lidar.rate_hz <= 100.0))
+    reject("lidar.rate_hz", lidar.rate_hz, "in (0, 100]");
+  if (!(lidar.range_limit_m >= 0.0)) reject("lidar.range_limit_m", lidar.range_limit_m, ">= 0");
+  if (!(lidar.range_noise_m >= 0.0)) reject("lidar.range_noise_m", lidar.range_noise_m, ">= 0");
+  if (!(lidar.dropout >= 0.0 && lidar.dropout < 1.0))
+    reject("lidar.dropout", lidar.dropout, "in [0, 1)");
+  if (!(sensors.rate_hz > 0.0 && sensors.rate_hz <= 100.0))
+    reject("sensors.rate_hz", sensors.rate_hz, "in (0, 100]");
+  if (robot.lawnmower) {
+    const Lawnmower& l = *robot.lawnmower;
+    if (l.lanes < 1) reject("robot.lawnmower.lanes", l.lanes, ">= 1");
+    if (!(l.lane_length_m > 0.0)) reject("robot.lawnmower.lane_length_m", l.lane_length_m, "> 0");
+    if (!(l.lane_spacing_m > 0.0))
+      reject("robot.lawnmower.lane_spacing_m", l.lane_spacing_m, "> 0");
+  }
+  for (std::size_t i = 0; i < actors.size(); ++i) {
+    const Actor& a = actors[i];
+    const std::string field = "actors[" + std::to_string(i) + "]";
+    if (a.waypoints.empty()) throw std::invalid_argument(field + " needs at least a start point");
+    if (!(a.speed_mps >= 0.0 && a.speed_mps <= 10.0))
+      reject(field + ".speed_mps", a.speed_mps, "in [0, 10]");
+    if (!(a.pause_s >= 0.0)) reject(field + ".pause_s", a.pause_s, ">= 0");
+  }
+  if (random_people.count < 0) reject("random_people.count", random_people.count, ">= 0");
+  if (random_people.count > 0 &&
+      !(random_people.area_max.array() > random_people.area_min.array()).all()) {
+    throw std::invalid_argument("random_people.area must have max > min in x and y");
+  }
+}
+
+ScanGeometry lidar_geometry(const LidarConfig& lidar) {
+  const auto n = static_cast<std::int32_t>(std::lround(lidar.fov_deg / lidar.resolution_deg)) +
+                 (lidar.fov_deg >= 360.0 ? 0 : 1);
+  const double increment = lidar.fov_deg * kDeg / (lidar.fov_deg >= 360.0 ? n : n - 1);
+  return {-0.5 * lidar.fov_deg * kDeg, increment, n, 0.05F, static_cast<float>(lidar.range_max_m)};
+}
+
+std::vector<Segment> rectangle_edges(const Rectangle& r) {
+  const Eigen::Vector2d ax(std::cos(r.yaw_rad), std::sin(r.yaw_rad));
+  const Eigen::Vector2d ay(-ax.y(), ax.x());
+  const Eigen::Vector2d a = r.center + 0.5 * r.length_m * ax + 0.5 * r.width_m * ay;
+  const Eigen::Vector2d b = r.center - 0.5 * r.length_m * ax + 0.5 * r.width_m * ay;
+  const Eigen::Vector2d c = r.center - 0.5 * r.length_m * ax - 0.5 * r.width_m * ay;
+  const Eigen::Vector2d d = r.center + 0.5 * r.length_m * ax - 0.5 * r.width_m * ay;
+  return {{a, b}, {b, c}, {c, d}, {d, a}};
+}
+
+SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double duration_s) {
+  scenario.validate();
+  const double duration = duration_s > 0.0 ? duration_s : scenario.duration_s;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+
+  // Actors: scripted, then generated from the seed.
+  std::vector<ActorState> actors;
+  std::vector<Actor> specs = scenario.actors;
+  const RandomPeople& rp = scenario.random_people;
+  for (int p = 0; p < rp.count; ++p) {
+    Actor a;
+    for (int w = 0; w < std::max(2, rp.waypoints); ++w) {
+      a.waypoints.emplace_back(rp.area_min.x() + u01(rng) * (rp.area_max.x() - rp.area_min.x()),
+                               rp.area_min.y() + u01(rng) * (rp.area_max.y() - rp.area_min.y()));
+    }
+    a.speed_mps = rp.min_speed_mps + u01(rng) * (rp.max_speed_mps - rp.min_speed_mps);
+    a.pause_s = u01(rng) * rp.max_pause_s;
+    specs.push_back(a);
+  }
+  for (const Actor& a : specs) {
+    std::vector<Eigen::Vector2d> rest(a.waypoints.begin() + 1, a.waypoints.end());
+    if (a.loop && !rest.empty()) rest.push_back(a.waypoints.front());
+    ActorState s{a,
+                 PathFollower(rest, a.loop),
+                 a.waypoints.front(),
+                 0.0,
+                 0.0,
+                 a.start_delay_s,
+                 u01(rng) * 2.0 * kPi,
+                 false};
+    actors.push_back(std::move(s));
+  }
+
+  // The robot's path.
+  std::vector<Eigen::Vector2d> robot_points = scenario.robot.lawnmower
+                                                  ? lawnmower_path(*scenario.robot.lawnmower)
+                                                  : scenario.robot.waypoints;
+  PathFollower robot_path(robot_points, scenario.robot.loop);
+  Pose2 pose = scenario.robot.start;
+
+  // Static shapes once.
+  World base;
+  base.segments = scenario.world.walls;
+  for (const Rectangle& r : scenario.world.rectangles) {
+    for (const Segment& s : rectangle_edges(r)) base.segments.push_back(s);
+  }
+  base.circles = scenario.world.circles;
+  const auto static_segments = static_cast<std::int32_t>(base.segments.size());
+  const auto static_circles = static_cast<std::int32_t>(base.circles.size());
+
+  const LidarConfig& lidar = scenario.lidar;
+  const ScanGeometry geometry = lidar_geometry(lidar);
+  std::vector<char> masked(static_cast<std::size_t>(geometry.beam_count), 0);
+  for (std::int32_t i = 0; i < geometry.beam_count; ++i) {
+    const double b = (geometry.angle_min_rad + i * geometry.angle_increment_rad) / kDeg;
+    for (const auto& [lo, hi] : lidar.masked_sectors_deg) {
+      if (b >= lo && b <= hi) masked[static_cast<std::size_t>(i)] = 1;
+    }
+  }
+
+  SimulationOutput out;
+  out.actor_count = static_cast<std::int32_t>(actors.size());
+  OdometrySensors sensors(scenario.sensors, scenario.robot.wheel_base_m, rng);
+  sensors.start_at(pose);
+  const auto steps = static_cast<std::int64_t>(std::floor(duration / kStep + 1e-9));
+  const auto sensor_every =
+      std::max<std::int64_t>(1, std::lround(1.0 / (scenario.sensors.rate_hz * kStep)));
+  const auto scan_every = std::max<std::int64_t>(1, std::lround(1.0 / (lidar.rate_hz * kStep)));
+  double v = 0.0, w = 0.0;
+
+  for (std::int64_t step = 0; step <= steps; ++step) {
+    const double t = scenario.start_time_s + static_cast<double>(step) * kStep;
+    // Sensors and scans see the state at t; then the world moves on by one step.
+    if (step % sensor_every == 0) {
+      SensorSample s;
+      s.stamp_s = t;
+      s.true_pose = pose;
+      s.true_v_mps = v;
+      s.true_w_radps = w;
+      sensors.measure(t, static_cast<double>(sensor_every) * kStep, v, w, s);
+      out.sensors.push_back(s);
+    }
+    if (step % scan_every == 0) {
+      World world = base;
+      std::vector<std::int32_t> actor_of_segment, actor_of_circle;
+      for (std::size_t a = 0; a < actors.size(); ++a) {
+        const ActorState& s = actors[a];
+        const Eigen::Vector2d fwd(std::cos(s.heading), std::sin(s.heading));
+        const Eigen::Vector2d left(-fwd.y(), fwd.x());
+        if (s.spec.kind == ActorKind::kPerson) {
+          const double swing = 0.15 * std::sin(s.gait_phase);
+          world.circles.push_back({s.position + swing * fwd + 0.1 * left, 0.06});
+          world.circles.push_back({s.position - swing * fwd - 0.1 * left, 0.06});
+          actor_of_circle.insert(actor_of_circle.end(), 2, static_cast<std::int32_t>(a));
+        } else {
+          for (const Segment& e :
+               rectangle_edges({s.position, s.spec.length_m, s.spec.width_m, s.heading})) {
+            world.segments.push_back(e);
+            actor_of_segment.push_back(static_cast<std::int32_t>(a));
+          }
+        }
+      }
+      // Cart edges come after the static segments; shift circle ids accordingly.
+      const auto segment_count = static_cast<std::int32_t>(world.segments.size());
+      ScanFrame frame;
+      frame.base_pose = pose;
+      std::vector<std::int32_t> hit;
+      frame.scan = raycast(world, pose * scenario.robot.laser_mount, geometry, &hit);
+      frame.scan.stamp_s = t;
+      frame.truth.assign(hit.size(), Truth::kNoReturn);
+      frame.actor.assign(hit.size(), 0);
+      for (std::size_t i = 0; i < hit.size(); ++i) {
+        float& r = frame.scan.ranges_m[i];
+        if (masked[i] != 0) {
+          r = std::numeric_limits<float>::quiet_NaN();
+          continue;
+        }
+        const bool beyond_limit = lidar.range_limit_m > 0.0 && r > lidar.range_limit_m;
+        if (hit[i] < 0 || beyond_limit || u01(rng) < lidar.dropout) {
+          r = std::numeric_limits<float>::infinity();
+          continue;
+        }
+        r = std::max(0.0F, r + static_cast<float>(lidar.range_noise_m * n01(rng)));
+        std::int32_t actor = -1;
+        const std::int32_t id = hit[i];
+        if (id >= static_segments && id < segment_count) {
+          actor = actor_of_segment[static_cast<std::size_t>(id - static_segments)];
+        } else if (id >= segment_count + static_circles) {
+          actor = actor_of_circle[static_cast<std::size_t>(id - segment_count - static_circles)];
+        }
+        if (actor < 0) {
+          frame.truth[i] = Truth::kStatic;
+        } else {
+          frame.truth[i] =
+              actors[static_cast<std::size_t>(actor)].moving ? Truth::kMoving : Truth::kStill;
+          frame.actor[i] = actor + 1;
+        }
+      }
+      out.scans.push_back(std::move(frame));
+    }
+
+    // Robot: steer toward the next waypoint, slow down while turning.
+    v = w = 0.0;
+    if (!robot_path.done()) {
+      robot_path.advance_if_reached(pose.translation(), 0.15);
+      if (!robot_path.done()) {
+        const Eigen::Vector2d to = robot_path.target() - pose.translation();
+        const double err = wrap_angle(std::atan2(to.y(), to.x()) - pose.yaw_rad);
+        w = std::clamp(2.0 * err, -0.6, 0.6);
+        v = scenario.robot.speed_mps * std::max(0.0, std::cos(err));
+      }
+    }
+    pose = pose * Pose2{v * kStep, 0.0, w * kStep};
+
+    // Actors.
+    for (ActorState& s : actors) {
+      s.moving = false;
+      if (s.delay_left > 0.0) {
+        s.delay_left -= kStep;
+        continue;
+      }
+      if (s.pause_left > 0.0) {
+        s.pause_left -= kStep;
+        continue;
+      }
+      if (s.path.done() || s.spec.speed_mps <= 0.0) continue;
+      const Eigen::Vector2d to = s.path.target() - s.position;
+      const double d = to.norm();
+      const double stepd = s.spec.speed_mps * kStep;
+      if (d > 1e-9) s.heading = std::atan2(to.y(), to.x());
+      s.position += to * std::min(1.0, stepd / std::max(d, 1e-9));
+      s.moving = true;
+      s.gait_phase += 2.0 * kPi * stepd / 1.4;  // A stride of 1.4 m (two steps).
+      if (s.path.advance_if_reached(s.position, 1e-6)) s.pause_left = s.spec.pause_s;
+    }
+  }
+  return out;
+}
+
+}  // namespace dispel::sim

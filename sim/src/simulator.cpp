@@ -311,7 +311,9 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
           continue;
         }
         const bool beyond_limit = lidar.range_limit_m > 0.0 && r > lidar.range_limit_m;
-        if (hit[i] < 0 || beyond_limit || u01(rng) < lidar.dropout) {
+        // Nearer than the scanner's minimum range (someone touching it) is no return either.
+        const bool too_close = r < geometry.range_min_m;
+        if (hit[i] < 0 || beyond_limit || too_close || u01(rng) < lidar.dropout) {
           r = std::numeric_limits<float>::infinity();
           continue;
         }

@@ -1,13 +1,26 @@
 #!/usr/bin/env bash
-# The main job: installs what is missing, builds, and runs `dispel filter` on the recording that
-# ships with the project (people walking past a stationary 2D LiDAR), then prints a summary.
-# Arguments are passed to `dispel filter` (e.g. --stats stats.json, --config config/default.yaml).
+# The main job: installs what is missing, builds, then
+#  1. simulates the thesis's scenario (config/scenarios/thesis_hall.yaml), filters it with the
+#     thesis's parameters and evaluates the result against the ground truth;
+#  2. filters the real recording that ships with the project (people walking past a stationary
+#     2D LiDAR);
+# and prints a table of both.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
-bag=data/leg_tracker/demo_stationary_simple_environment.bag
-mkdir -p build/demo
-./build/apps/dispel filter "$bag" -o build/demo/filtered.bag --static-sensor --scale-to-scanner \
-  --stats build/demo/stats.json "$@"
-echo "statistics: build/demo/stats.json; replay build/demo/filtered.bag with /scan_filtered"
+dispel=./build/apps/dispel
+out=build/demo
+mkdir -p "$out"
+
+echo "== simulated: the thesis's hall (range cut to 5.5 m, masked sectors, people walking), seed 1"
+$dispel sim config/scenarios/thesis_hall.yaml -o "$out/thesis_hall.bag" --seed 1
+$dispel filter "$out/thesis_hall.bag" -o "$out/thesis_hall_filtered.bag" \
+  --config config/thesis_sensor.yaml --stats "$out/thesis_hall_stats.json"
+$dispel eval --truth "$out/thesis_hall.bag" --result "$out/thesis_hall_filtered.bag"
+
+echo
+echo "== recorded: leg_tracker demo bag (stationary Hokuyo, people walking), no ground truth"
+$dispel filter data/leg_tracker/demo_stationary_simple_environment.bag -o "$out/filtered.bag" \
+  --static-sensor --scale-to-scanner --stats "$out/stats.json" "$@"
+echo "outputs in $out/: bags to replay (/scan_filtered), statistics as JSON"

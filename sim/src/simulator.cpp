@@ -178,7 +178,10 @@ ScanGeometry lidar_geometry(const LidarConfig& lidar) {
   const auto n = static_cast<std::int32_t>(std::lround(lidar.fov_deg / lidar.resolution_deg)) +
                  (lidar.fov_deg >= 360.0 ? 0 : 1);
   const double increment = lidar.fov_deg * kDeg / (lidar.fov_deg >= 360.0 ? n : n - 1);
-  return {-0.5 * lidar.fov_deg * kDeg, increment, n, 0.05F, static_cast<float>(lidar.range_max_m)};
+  // A scanner whose range is cut reports the cut as its maximum range.
+  const double range_max =
+      lidar.range_limit_m > 0.0 ? std::min(lidar.range_limit_m, lidar.range_max_m) : lidar.range_max_m;
+  return {-0.5 * lidar.fov_deg * kDeg, increment, n, 0.05F, static_cast<float>(range_max)};
 }
 
 std::vector<Segment> rectangle_edges(const Rectangle& r) {

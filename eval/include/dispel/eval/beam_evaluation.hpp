@@ -44,11 +44,11 @@ struct Rates {
 };
 
 /// Accumulates scans. An actor's latency is the time from the first scan in which it is seen
-/// moving (at least `min_beams` beams) to the first scan in which at least half of its beams
-/// are removed.
+/// moving with at least `min_beams` beams (8, the thesis's N_min: with fewer, no segmentation can
+/// make it an object) to the first scan in which at least half of its beams are removed.
 class BeamEvaluator {
  public:
-  explicit BeamEvaluator(int min_beams = 3) : min_beams_(min_beams) {}
+  explicit BeamEvaluator(int min_beams = 8) : min_beams_(min_beams) {}
 
   /// @p truth, @p actor (index + 1, or 0) and @p removed are per beam and of equal length.
   void add_scan(double stamp_s, const std::vector<std::uint8_t>& truth,

@@ -119,3 +119,49 @@ elseif(NOT rc EQUAL 0 OR NOT EXISTS ${out})
   message(FATAL_ERROR "run under SIGINT ended with ${rc}: ${se}")
 endif()
 message(STATUS "dispel filter contract holds (SIGINT run exit ${rc})")
+
+# dispel sim and dispel eval: a short simulated run, filtered and evaluated.
+set(sim ${WORK_DIR}/sim.bag)
+run_dispel(rc so se sim ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o ${sim} --seed 3
+           --duration 4)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${sim})
+  message(FATAL_ERROR "dispel sim failed (${rc}): ${se}")
+endif()
+run_dispel(rc so se filter ${sim} -o ${WORK_DIR}/sim_filtered.bag
+           --config ${SOURCE_DIR}/config/thesis_sensor.yaml)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "dispel filter on the simulation failed (${rc}): ${se}")
+endif()
+run_dispel(rc so se eval --truth ${sim} --result ${WORK_DIR}/sim_filtered.bag --json)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "dispel eval failed (${rc}): ${se}")
+endif()
+string(JSON pres GET "${so}" preservation_rate)
+string(JSON scans GET "${so}" scans)
+string(JSON static_beams GET "${so}" per_class static beams)
+string(JSON latency_type TYPE "${so}" detection_latency_s)
+string(JSON f1_type TYPE "${so}" f1)
+if(NOT scans EQUAL 81 OR NOT static_beams GREATER 0 OR pres LESS 0.99
+   OR NOT latency_type STREQUAL "OBJECT" OR NOT f1_type MATCHES "NUMBER|NULL")
+  message(FATAL_ERROR "bad evaluation: ${so}")
+endif()
+
+file(WRITE ${WORK_DIR}/bad_scenario.yaml "lidar: {range_limt_m: 5}\n")
+function(expect_error_no_output expected output)
+  file(REMOVE ${output})
+  run_dispel(rc so se ${ARGN})
+  string(STRIP "${se}" line)
+  if(rc EQUAL 0 OR NOT line MATCHES "${expected}" OR line MATCHES "\n" OR EXISTS ${output})
+    message(FATAL_ERROR "'dispel ${ARGN}': expected one line matching '${expected}', a non-zero "
+                        "exit and no ${output}; got ${rc}:\n${se}")
+  endif()
+endfunction()
+expect_error_no_output("unknown key 'lidar.range_limt_m'" ${WORK_DIR}/x.bag
+                       sim ${WORK_DIR}/bad_scenario.yaml -o ${WORK_DIR}/x.bag)
+expect_error_no_output("cannot open the scenario file" ${WORK_DIR}/x.bag
+                       sim ${WORK_DIR}/missing.yaml -o ${WORK_DIR}/x.bag)
+expect_error_no_output("no /scan_truth" ${WORK_DIR}/x.bag
+                       eval --truth ${BAG} --result ${WORK_DIR}/sim_filtered.bag)
+expect_error_no_output("no /scan_labels or /scan_filtered" ${WORK_DIR}/x.bag
+                       eval --truth ${sim} --result ${sim})
+message(STATUS "dispel sim and eval contract holds")

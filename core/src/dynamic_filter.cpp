@@ -190,13 +190,15 @@ void DynamicFilter::process(const LaserScan& scan, const Pose2& sensor_pose, Fil
     obs.points[kCentroid] = sensor_pose.apply(o.centroid_m);
     // An edge beside a beam with no return, at the end of the scanner's range, may continue
     // beyond it: as the robot moves, it slides along the object like a view limit.
-    const double range_edge = static_cast<double>(scan.range_max_m) - 2.0 * config_.segmentation.cluster_gap_m;
+    const double range_edge =
+        static_cast<double>(scan.range_max_m) - 2.0 * config_.segmentation.cluster_gap_m;
     const auto at_range_limit = [&](EdgeNeighbour n, const Eigen::Vector2d& p) {
       return n == EdgeNeighbour::kInvalid && p.norm() > range_edge;
     };
     obs.trusted[kFirst] =
         edge_trusted(o.before_first) && !at_range_limit(o.before_first, o.first_point_m);
-    obs.trusted[kLast] = edge_trusted(o.after_last) && !at_range_limit(o.after_last, o.last_point_m);
+    obs.trusted[kLast] =
+        edge_trusted(o.after_last) && !at_range_limit(o.after_last, o.last_point_m);
     // A hidden part of the outline shifts the centroid as well.
     obs.trusted[kCentroid] = obs.trusted[kFirst] && obs.trusted[kLast];
     obs.ambiguous = edge_at_view_limit(o.before_first) || edge_at_view_limit(o.after_last);

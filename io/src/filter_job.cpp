@@ -349,13 +349,7 @@ FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
       for (; next_odom < log.odometry.size() && log.odometry[next_odom].stamp_s <= t; ++next_odom) {
         const TimedPose& p = log.odometry[next_odom];
         if (!std::isfinite(p.stamp_s) || p.stamp_s < 0.0) continue;
-        nav_msgs::Odometry msg;
-        msg.header.stamp = to_ros_time(p.stamp_s);
-        msg.header.frame_id = "odom";
-        msg.child_frame_id = "base_link";
-        msg.pose.pose.position.x = p.pose.x_m;
-        msg.pose.pose.position.y = p.pose.y_m;
-        msg.pose.pose.orientation = quaternion_from_yaw(p.pose.yaw_rad);
+        const nav_msgs::Odometry msg = to_ros_odometry(p.stamp_s, "odom", "base_link", p.pose);
         out.write("/odom", msg.header.stamp, msg);
         ++stats.messages_out;
       }

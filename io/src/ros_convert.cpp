@@ -58,6 +58,21 @@ geometry_msgs::Quaternion quaternion_from_yaw(double yaw_rad) {
   return q;
 }
 
+nav_msgs::Odometry to_ros_odometry(double stamp_s, const std::string& frame_id,
+                                   const std::string& child_frame_id, const Pose2& pose,
+                                   double v_mps, double w_radps) {
+  nav_msgs::Odometry m;
+  m.header.stamp = to_ros_time(stamp_s);
+  m.header.frame_id = frame_id;
+  m.child_frame_id = child_frame_id;
+  m.pose.pose.position.x = pose.x_m;
+  m.pose.pose.position.y = pose.y_m;
+  m.pose.pose.orientation = quaternion_from_yaw(pose.yaw_rad);
+  m.twist.twist.linear.x = v_mps;
+  m.twist.twist.angular.z = w_radps;
+  return m;
+}
+
 Pose2 from_ros(const geometry_msgs::Transform& t) {
   return {t.translation.x, t.translation.y, yaw_of(t.rotation)};
 }

@@ -14,23 +14,6 @@
 #include "dispel/io/ros_convert.hpp"
 
 namespace dispel::io {
-namespace {
-
-nav_msgs::Odometry odometry(double stamp, const char* frame, const Pose2& p, double v, double w) {
-  nav_msgs::Odometry m;
-  m.header.stamp = to_ros_time(stamp);
-  m.header.frame_id = frame;
-  m.child_frame_id = "base_link";
-  m.pose.pose.position.x = p.x_m;
-  m.pose.pose.position.y = p.y_m;
-  m.pose.pose.orientation = quaternion_from_yaw(p.yaw_rad);
-  m.twist.twist.linear.x = v;
-  m.twist.twist.angular.z = w;
-  return m;
-}
-
-}  // namespace
-
 void write_simulation_bag(const sim::SimulationOutput& run, const sim::Scenario& scenario,
                           const std::string& path) {
   AtomicFile file(path);
@@ -70,9 +53,12 @@ void write_simulation_bag(const sim::SimulationOutput& run, const sim::Scenario&
     for (const sim::SensorSample& s : run.sensors) {
       write_scans_until(s.stamp_s);
       const ros::Time t = to_ros_time(s.stamp_s);
-      bag.write("/odom", t, odometry(s.stamp_s, "odom", s.odom_pose, s.odom_v_mps, s.odom_w_radps));
+      bag.write("/odom", t,
+                to_ros_odometry(s.stamp_s, "odom", "base_link", s.odom_pose, s.odom_v_mps,
+                                s.odom_w_radps));
       bag.write("/ground_truth", t,
-                odometry(s.stamp_s, "map", s.true_pose, s.true_v_mps, s.true_w_radps));
+                to_ros_odometry(s.stamp_s, "map", "base_link", s.true_pose, s.true_v_mps,
+                                s.true_w_radps));
       sensor_msgs::JointState wheels;
       wheels.header.stamp = t;
       wheels.name = {"left_wheel", "right_wheel"};

@@ -179,8 +179,9 @@ ScanGeometry lidar_geometry(const LidarConfig& lidar) {
                  (lidar.fov_deg >= 360.0 ? 0 : 1);
   const double increment = lidar.fov_deg * kDeg / (lidar.fov_deg >= 360.0 ? n : n - 1);
   // A scanner whose range is cut reports the cut as its maximum range.
-  const double range_max =
-      lidar.range_limit_m > 0.0 ? std::min(lidar.range_limit_m, lidar.range_max_m) : lidar.range_max_m;
+  const double range_max = lidar.range_limit_m > 0.0
+                               ? std::min(lidar.range_limit_m, lidar.range_max_m)
+                               : lidar.range_max_m;
   return {-0.5 * lidar.fov_deg * kDeg, increment, n, 0.05F, static_cast<float>(range_max)};
 }
 

@@ -29,6 +29,11 @@ double yaw_of(const geometry_msgs::Quaternion& q);
 /// A quaternion for a rotation of @p yaw_rad about z.
 geometry_msgs::Quaternion quaternion_from_yaw(double yaw_rad);
 
+/// An Odometry message for a planar pose and velocity (forward v, yaw rate w).
+nav_msgs::Odometry to_ros_odometry(double stamp_s, const std::string& frame_id,
+                                   const std::string& child_frame_id, const Pose2& pose,
+                                   double v_mps = 0.0, double w_radps = 0.0);
+
 /// The planar part of a transform (x, y, yaw).
 Pose2 from_ros(const geometry_msgs::Transform& t);
 /// The planar part of a pose (x, y, yaw).

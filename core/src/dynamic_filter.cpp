@@ -73,6 +73,13 @@ void TrackingConfig::validate() const {
     reject("tracking.matching", static_cast<int>(matching), "global or nearest_neighbour");
   }
   if (max_missed_scans < 0) reject("tracking.max_missed_scans", max_missed_scans, ">= 0");
+  if (!std::isfinite(companion_distance_m) || companion_distance_m < 0.0) {
+    reject("tracking.companion_distance_m", companion_distance_m, "a finite number >= 0");
+  }
+  if (!std::isfinite(companion_speed_difference_mps) || companion_speed_difference_mps < 0.0) {
+    reject("tracking.companion_speed_difference_mps", companion_speed_difference_mps,
+           "a finite number >= 0");
+  }
   if (!std::isfinite(max_gate_m) || max_gate_m < match_distance_m) {
     reject("tracking.max_gate_m", max_gate_m, "finite and >= match_distance_m");
   }
@@ -265,6 +272,7 @@ void DynamicFilter::process(const LaserScan& scan, const Pose2& sensor_pose, Fil
       track_of_object_[i] = static_cast<std::int32_t>(tracks_.size());
       tracks_.push_back(std::move(track));
     }
+    spread_to_companions();
     for (std::size_t i = 0; i < objects.size(); ++i) {
       object_class_label_[i] =
           static_cast<std::int32_t>(tracks_[track_of_object_[i]].cls.object_class);
@@ -328,6 +336,31 @@ bool DynamicFilter::similar_extent(const Observation& obs, const Track& track) c
   const double change = std::abs(obs.extent_m - track.extent_m);
   return change <= std::max(config_.tracking.max_extent_change_m,
                             0.5 * std::max(obs.extent_m, track.extent_m));
+}
+
+// Two tracks seen in this scan that are close together and move alike are parts of one thing
+// (the two legs of a walker, tracked apart when one is behind the other): once one is dynamic,
+// so is the other, instead of it collecting L_d scans of its own.
+void DynamicFilter::spread_to_companions() {
+  const TrackingConfig& tc = config_.tracking;
+  if (!(tc.companion_distance_m > 0.0)) return;
+  const double limit = config_.classification.speed_limit_mps;
+  for (const Track& a : tracks_) {
+    if (a.object_index < 0 || a.cls.object_class != ObjectClass::kDynamic) continue;
+    const Eigen::Vector2d pa = a.kf[kCentroid].position();
+    const Eigen::Vector2d va = a.kf[kCentroid].velocity();
+    for (Track& b : tracks_) {
+      if (b.object_index < 0 || b.cls.object_class == ObjectClass::kDynamic) continue;
+      const Eigen::Vector2d vb = b.kf[kCentroid].velocity();
+      if (b.speed_mps > 3.0 * limit && b.cls.dynamic_weight > 0 &&
+          (b.kf[kCentroid].position() - pa).norm() <= tc.companion_distance_m &&
+          (vb - va).norm() <= tc.companion_speed_difference_mps) {
+        b.cls.object_class = ObjectClass::kDynamic;
+        b.cls.dynamic_weight = std::max(b.cls.dynamic_weight, a.cls.dynamic_weight);
+        b.cls.still_scans = 0;
+      }
+    }
+  }
 }
 
 void DynamicFilter::associate(double stamp_s, std::vector<std::int32_t>& track_of_object) {

@@ -133,6 +133,8 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
     b.boolean("tracking.inherit_on_split", t.inherit_on_split);
     b.number("tracking.max_gate_m", t.max_gate_m);
     b.number("tracking.max_extent_change_m", t.max_extent_change_m);
+    b.number("tracking.companion_distance_m", t.companion_distance_m);
+    b.number("tracking.companion_speed_difference_mps", t.companion_speed_difference_mps);
     VelocityFilterConfig& v = c.velocity;
     b.section("velocity");
     b.number("velocity.position_variance_m2", v.position_variance_m2);

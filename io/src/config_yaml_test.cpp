@@ -33,6 +33,9 @@ TEST(ConfigYaml, ShippedDefaultFileHoldsExactlyTheDefaults) {
   EXPECT_EQ(loaded.tracking.max_missed_scans, d.tracking.max_missed_scans);
   EXPECT_EQ(loaded.tracking.max_gate_m, d.tracking.max_gate_m);
   EXPECT_EQ(loaded.tracking.max_extent_change_m, d.tracking.max_extent_change_m);
+  EXPECT_EQ(loaded.tracking.companion_distance_m, d.tracking.companion_distance_m);
+  EXPECT_EQ(loaded.tracking.companion_speed_difference_mps,
+            d.tracking.companion_speed_difference_mps);
   EXPECT_EQ(loaded.velocity.position_variance_m2, d.velocity.position_variance_m2);
   EXPECT_EQ(loaded.velocity.velocity_variance_m2ps2, d.velocity.velocity_variance_m2ps2);
   EXPECT_EQ(loaded.velocity.measurement_variance_m2, d.velocity.measurement_variance_m2);

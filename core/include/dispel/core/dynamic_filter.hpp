@@ -47,6 +47,11 @@ struct TrackingConfig {
   /// whose legs split apart, a wall cut by a walker's shadow) starts its track with that track's
   /// class, weights and velocity instead of from scratch.
   bool inherit_on_split = true;
+  /// A track seen in the same scan within this distance of a dynamic track, moving (faster than
+  /// L_v) with a velocity within companion_speed_difference_mps of it, is dynamic too: the other
+  /// leg of a walker. 0 turns it off (the thesis has no such rule).
+  double companion_distance_m = 0.0;
+  double companion_speed_difference_mps = 0.5;
 
   /// Throws std::invalid_argument naming the first bad field and its value.
   void validate() const;
@@ -202,6 +207,7 @@ class DynamicFilter {
   void associate_global(double stamp_s, std::vector<std::int32_t>& track_of_object);
   void rescue_by_edges(double stamp_s, std::vector<std::int32_t>& track_of_object);
   bool similar_extent(const Observation& obs, const Track& track) const;
+  void spread_to_companions();
   void update_track(Track& track, const Observation& obs, double stamp_s);
   Track new_track(const Observation& obs, double stamp_s, std::int32_t object_index);
   void write_output(FilterResult& out);

@@ -93,6 +93,7 @@ void DynamicFilterConfig::validate() const {
   tracking.validate();
   velocity.validate();
   classification.validate();
+  free_space.validate();
   if (!(max_time_gap_s > 0.0)) reject("max_time_gap_s", max_time_gap_s, "> 0");
   if (!(max_pose_jump_m > 0.0)) reject("max_pose_jump_m", max_pose_jump_m, "> 0");
   if (!(max_pose_jump_rad > 0.0)) reject("max_pose_jump_rad", max_pose_jump_rad, "> 0");
@@ -124,11 +125,14 @@ DynamicFilterConfig scale_to_scanner(DynamicFilterConfig config, double angle_in
 }
 
 DynamicFilter::DynamicFilter(DynamicFilterConfig config)
-    : config_((config.validate(), std::move(config))), segmenter_(config_.segmentation) {}
+    : config_((config.validate(), std::move(config))),
+      segmenter_(config_.segmentation),
+      free_space_(config_.free_space) {}
 
 void DynamicFilter::reset() {
   counters_.tracks_dropped += static_cast<std::int64_t>(tracks_.size());
   tracks_.clear();
+  free_space_.clear();
   have_previous_ = false;
 }
 
@@ -266,11 +270,16 @@ void DynamicFilter::process(const LaserScan& scan, const Pose2& sensor_pose, Fil
       if (parent[i] >= 0) {
         const Track& from = tracks_[parent[i]];
         track.cls = from.cls;
+        track.age_scans = from.age_scans;  // A continuation: as old as what it came from.
         for (PointVelocityFilter& kf : track.kf) kf.set_velocity(from.kf[kCentroid].velocity());
         track.speed_mps = from.speed_mps;
       }
       track_of_object_[i] = static_cast<std::int32_t>(tracks_.size());
       tracks_.push_back(std::move(track));
+    }
+    if (config_.free_space.enabled) {
+      mark_objects_in_free_space(scan, sensor_pose, out.segmentation);
+      free_space_.add_scan(scan, sensor_pose);
     }
     spread_to_companions();
     for (std::size_t i = 0; i < objects.size(); ++i) {
@@ -336,6 +345,42 @@ bool DynamicFilter::similar_extent(const Observation& obs, const Track& track) c
   const double change = std::abs(obs.extent_m - track.extent_m);
   return change <= std::max(config_.tracking.max_extent_change_m,
                             0.5 * std::max(obs.extent_m, track.extent_m));
+}
+
+constexpr std::int32_t kFreeSpaceMaxAge = 10;
+
+// An object most of whose points stand where beams passed freely before (and not as far as the
+// map knows, hit since) has moved there: it is dynamic at once, unless it is too large to be.
+void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan, const Pose2& sensor_pose,
+                                               const Segmentation& segmentation) {
+  std::vector<std::int32_t> in_free(segmentation.objects.size(), 0);
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    const std::int32_t o = segmentation.beam_labels[b];
+    if (o < 0) continue;
+    const double r = scan.ranges_m[b];
+    const double bearing = scan.bearing_rad(b);
+    if (free_space_.known_free(sensor_pose.apply({r * std::cos(bearing), r * std::sin(bearing)}))) {
+      ++in_free[static_cast<std::size_t>(o)];
+    }
+  }
+  for (std::size_t i = 0; i < segmentation.objects.size(); ++i) {
+    const ScanObject& o = segmentation.objects[i];
+    if (static_cast<double>(in_free[i]) < config_.free_space.min_object_share * o.point_count)
+      continue;
+    if ((o.last_point_m - o.first_point_m).norm() > config_.classification.max_dynamic_extent_m) {
+      continue;
+    }
+    Track& t = tracks_[static_cast<std::size_t>(track_of_object_[i])];
+    // A track followed for a while without any sign of motion is known structure seen from a new
+    // side (or merged with someone next to it), not something that just appeared.
+    if (t.age_scans > kFreeSpaceMaxAge) continue;
+    if (t.cls.object_class != ObjectClass::kDynamic) {
+      t.cls.object_class = ObjectClass::kDynamic;
+      t.cls.dynamic_weight =
+          std::max(t.cls.dynamic_weight, config_.classification.dynamic_weight_limit);
+      t.cls.still_scans = 0;
+    }
+  }
 }
 
 // Two tracks seen in this scan that are close together and move alike are parts of one thing

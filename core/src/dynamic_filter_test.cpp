@@ -407,6 +407,32 @@ TEST(DynamicFilter, CompanionRuleRemovesTheSecondLegWithTheFirst) {
   EXPECT_LE(with_companion + 5, alone);
 }
 
+TEST(DynamicFilter, SomeoneSteppingIntoSpaceSeenEmptyIsDynamicAtOnceWithFreeSpaceEvidence) {
+  // A person steps out from behind a pillar into floor the scanner has been seeing through.
+  Scenario s;
+  s.walls = room(10.0, 8.0);
+  s.pillars = {{{4.0, 2.0}, 0.5}};
+  s.movers = {{[](double t) {
+                 // Hidden behind the pillar for 2 s, then walking out across the view.
+                 return t < 2.0 ? Eigen::Vector2d(5.0, 2.4) : Eigen::Vector2d(5.0, 2.4 - (t - 2.0));
+               },
+               0.2}};
+  for (bool free_space : {false, true}) {
+    DynamicFilterConfig config;
+    config.free_space.enabled = free_space;
+    DynamicFilter filter{config};
+    const auto st = run(s, filter, 120);
+    EXPECT_EQ(static_removed(st), 0) << "free space " << free_space;
+    const int delay = scans_until_removed(st, 1);
+    ASSERT_GE(delay, 0);
+    if (free_space) {
+      EXPECT_LE(delay, 3);
+    } else {
+      EXPECT_GE(delay, 19);  // L_d scans at least.
+    }
+  }
+}
+
 TEST(DynamicFilter, MissedScansAndIrregularTimeStepsStillRemoveTheWalker) {
   Scenario s;
   s.walls = room(10.0, 8.0);

@@ -155,6 +155,16 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
     b.integer("classification.still_scans_to_static", k.still_scans_to_static);
     b.boolean("classification.slow_scans_reduce_dynamic_weight",
               k.slow_scans_reduce_dynamic_weight);
+    FreeSpaceConfig& f = c.free_space;
+    b.section("free_space");
+    b.boolean("free_space.enabled", f.enabled);
+    b.number("free_space.cell_size_m", f.cell_size_m);
+    b.number("free_space.extent_m", f.extent_m);
+    b.number("free_space.margin_m", f.margin_m);
+    b.integer("free_space.min_free_observations", f.min_free_observations);
+    b.integer("free_space.max_recent_hits", f.max_recent_hits);
+    b.integer("free_space.neighbourhood_cells", f.neighbourhood_cells);
+    b.number("free_space.min_object_share", f.min_object_share);
     b.number("max_time_gap_s", c.max_time_gap_s);
     b.number("max_pose_jump_m", c.max_pose_jump_m);
     b.number("max_pose_jump_rad", c.max_pose_jump_rad);

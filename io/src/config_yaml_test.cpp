@@ -52,6 +52,14 @@ TEST(ConfigYaml, ShippedDefaultFileHoldsExactlyTheDefaults) {
   EXPECT_EQ(loaded.classification.still_scans_to_static, d.classification.still_scans_to_static);
   EXPECT_EQ(loaded.classification.slow_scans_reduce_dynamic_weight,
             d.classification.slow_scans_reduce_dynamic_weight);
+  EXPECT_EQ(loaded.free_space.enabled, d.free_space.enabled);
+  EXPECT_EQ(loaded.free_space.cell_size_m, d.free_space.cell_size_m);
+  EXPECT_EQ(loaded.free_space.extent_m, d.free_space.extent_m);
+  EXPECT_EQ(loaded.free_space.margin_m, d.free_space.margin_m);
+  EXPECT_EQ(loaded.free_space.min_free_observations, d.free_space.min_free_observations);
+  EXPECT_EQ(loaded.free_space.max_recent_hits, d.free_space.max_recent_hits);
+  EXPECT_EQ(loaded.free_space.neighbourhood_cells, d.free_space.neighbourhood_cells);
+  EXPECT_EQ(loaded.free_space.min_object_share, d.free_space.min_object_share);
   EXPECT_EQ(loaded.max_time_gap_s, d.max_time_gap_s);
   EXPECT_EQ(loaded.max_pose_jump_m, d.max_pose_jump_m);
   EXPECT_EQ(loaded.max_pose_jump_rad, d.max_pose_jump_rad);

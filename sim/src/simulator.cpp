@@ -206,11 +206,37 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
   std::vector<ActorState> actors;
   std::vector<Actor> specs = scenario.actors;
   const RandomPeople& rp = scenario.random_people;
+  // People walk around pillars and machines, not through them: a leg of a path must keep 0.5 m
+  // from every static circle and rectangle (taken as its circumscribed circle).
+  std::vector<std::pair<Eigen::Vector2d, double>> obstacles;
+  for (const Circle& c : scenario.world.circles) obstacles.emplace_back(c.center, c.radius_m + 0.5);
+  for (const Rectangle& r : scenario.world.rectangles) {
+    obstacles.emplace_back(r.center, 0.5 * std::hypot(r.length_m, r.width_m) + 0.5);
+  }
+  const auto clear_path = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    for (const auto& [c, r] : obstacles) {
+      const Eigen::Vector2d ab = b - a;
+      const double t =
+          ab.squaredNorm() > 0.0 ? std::clamp((c - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+      if ((a + t * ab - c).norm() < r) return false;
+    }
+    return true;
+  };
+  const auto random_point = [&]() {
+    return Eigen::Vector2d(rp.area_min.x() + u01(rng) * (rp.area_max.x() - rp.area_min.x()),
+                           rp.area_min.y() + u01(rng) * (rp.area_max.y() - rp.area_min.y()));
+  };
   for (int p = 0; p < rp.count; ++p) {
     Actor a;
     for (int w = 0; w < std::max(2, rp.waypoints); ++w) {
-      a.waypoints.emplace_back(rp.area_min.x() + u01(rng) * (rp.area_max.x() - rp.area_min.x()),
-                               rp.area_min.y() + u01(rng) * (rp.area_max.y() - rp.area_min.y()));
+      Eigen::Vector2d next = random_point();
+      for (int attempt = 0; attempt < 100; ++attempt) {
+        const bool ok =
+            a.waypoints.empty() ? clear_path(next, next) : clear_path(a.waypoints.back(), next);
+        if (ok) break;
+        next = random_point();
+      }
+      a.waypoints.push_back(next);
     }
     a.speed_mps = rp.min_speed_mps + u01(rng) * (rp.max_speed_mps - rp.min_speed_mps);
     a.pause_s = u01(rng) * rp.max_pause_s;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "dispel/core/classification.hpp"
+#include "dispel/core/free_space_map.hpp"
 #include "dispel/core/laser_scan.hpp"
 #include "dispel/core/pose2.hpp"
 #include "dispel/core/segmentation.hpp"
@@ -63,6 +64,9 @@ struct DynamicFilterConfig {
   TrackingConfig tracking;
   VelocityFilterConfig velocity;
   ClassificationConfig classification;
+  /// Beyond the thesis: an object that appears where beams used to pass freely is dynamic at
+  /// once (off by default).
+  FreeSpaceConfig free_space;
   /// A larger gap between two scans resets the tracks (they can no longer be followed).
   double max_time_gap_s = 1.0;
   /// A larger change of the sensor pose between two consecutive scans is a jump of the fixed
@@ -208,6 +212,8 @@ class DynamicFilter {
   void rescue_by_edges(double stamp_s, std::vector<std::int32_t>& track_of_object);
   bool similar_extent(const Observation& obs, const Track& track) const;
   void spread_to_companions();
+  void mark_objects_in_free_space(const LaserScan& scan, const Pose2& sensor_pose,
+                                  const Segmentation& segmentation);
   void update_track(Track& track, const Observation& obs, double stamp_s);
   Track new_track(const Observation& obs, double stamp_s, std::int32_t object_index);
   void write_output(FilterResult& out);
@@ -216,6 +222,7 @@ class DynamicFilter {
   Segmenter segmenter_;
   FilterCounters counters_;
   std::vector<Track> tracks_;
+  FreeSpaceMap free_space_;
   std::uint64_t next_id_ = 1;
   bool have_previous_ = false;
   double previous_stamp_s_ = 0.0;

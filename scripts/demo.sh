@@ -17,7 +17,12 @@ echo "== simulated: the thesis's hall (range cut to 5.5 m, masked sectors, peopl
 $dispel sim config/scenarios/thesis_hall.yaml -o "$out/thesis_hall.bag" --seed 1
 $dispel filter "$out/thesis_hall.bag" -o "$out/thesis_hall_filtered.bag" \
   --config config/thesis_sensor.yaml --stats "$out/thesis_hall_stats.json"
+echo "-- the thesis's parameters (config/thesis_sensor.yaml):"
 $dispel eval --truth "$out/thesis_hall.bag" --result "$out/thesis_hall_filtered.bag"
+$dispel filter "$out/thesis_hall.bag" -o "$out/thesis_hall_tuned.bag" \
+  --config config/thesis_sensor_tuned.yaml > /dev/null
+echo "-- tuned (config/thesis_sensor_tuned.yaml):"
+$dispel eval --truth "$out/thesis_hall.bag" --result "$out/thesis_hall_tuned.bag"
 
 echo
 echo "== recorded: leg_tracker demo bag (stationary Hokuyo, people walking), no ground truth"

@@ -4,14 +4,15 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+
+#include "dispel/core/invalid_field.hpp"
 
 namespace dispel {
 namespace {
 
 [[noreturn]] void reject(const char* field, double value, const char* rule) {
-  std::ostringstream out;
-  out << "classification." << field << " must be " << rule << ", got " << value;
-  throw std::invalid_argument(out.str());
+  reject_field(std::string("classification.") + field, value, rule);
 }
 
 }  // namespace

@@ -9,15 +9,12 @@
 #include <utility>
 
 #include "dispel/core/assignment.hpp"
+#include "dispel/core/invalid_field.hpp"
 
 namespace dispel {
 namespace {
 
-[[noreturn]] void reject(const std::string& field, double value, const char* rule) {
-  std::ostringstream out;
-  out << field << " must be " << rule << ", got " << value;
-  throw std::invalid_argument(out.str());
-}
+constexpr auto reject = reject_field;
 
 bool finite_pose(const Pose2& p) {
   return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.yaw_rad);

@@ -5,13 +5,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "dispel/core/invalid_field.hpp"
+
 namespace dispel {
 
 void FreeSpaceConfig::validate() const {
   auto bad = [](const char* field, double v, const char* rule) {
-    std::ostringstream out;
-    out << "free_space." << field << " must be " << rule << ", got " << v;
-    throw std::invalid_argument(out.str());
+    reject_field(std::string("free_space.") + field, v, rule);
   };
   if (!(cell_size_m > 0.0 && std::isfinite(cell_size_m))) bad("cell_size_m", cell_size_m, "> 0");
   if (!(extent_m >= 10.0 * cell_size_m && extent_m / cell_size_m <= 8192.0)) {

@@ -6,14 +6,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "dispel/core/invalid_field.hpp"
+
 namespace dispel {
 namespace {
 
 void require_positive(double value, const char* name) {
   if (!std::isfinite(value) || !(value > 0.0)) {
-    std::ostringstream out;
-    out << "velocity." << name << " must be a finite number > 0, got " << value;
-    throw std::invalid_argument(out.str());
+    reject_field(std::string("velocity.") + name, value, "a finite number > 0");
   }
 }
 
@@ -25,9 +25,7 @@ void VelocityFilterConfig::validate() const {
   require_positive(measurement_variance_m2, "measurement_variance_m2");
   require_positive(nominal_scan_period_s, "nominal_scan_period_s");
   if (!std::isfinite(velocity_decay) || velocity_decay < 0.0 || velocity_decay > 1.0) {
-    std::ostringstream out;
-    out << "velocity.velocity_decay must be in [0, 1], got " << velocity_decay;
-    throw std::invalid_argument(out.str());
+    reject_field("velocity.velocity_decay", velocity_decay, "in [0, 1]");
   }
 }
 

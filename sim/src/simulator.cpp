@@ -7,17 +7,15 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "dispel/core/invalid_field.hpp"
+
 namespace dispel::sim {
 namespace {
 
 constexpr double kDeg = kPi / 180.0;
 constexpr double kStep = 0.01;  // Physics step, seconds.
 
-[[noreturn]] void reject(const std::string& field, double value, const char* rule) {
-  std::ostringstream out;
-  out << field << " must be " << rule << ", got " << value;
-  throw std::invalid_argument(out.str());
-}
+constexpr auto reject = reject_field;
 
 // The path a robot or actor follows: waypoints in order, optionally looping.
 class PathFollower {

@@ -49,7 +49,9 @@ nlohmann::ordered_json stats_json(const io::FilterJobOptions& o, const io::Filte
   }
   j["events"] = events;
   j["beams_removed"] = {{"dynamic", s.counters.beams_removed_dynamic},
-                        {"unknown", s.counters.beams_removed_unknown}};
+                        {"unknown", s.counters.beams_removed_unknown},
+                        {"fragments", s.counters.beams_removed_fragments}};
+  j["beams_kept_long_occupied"] = s.counters.beams_kept_long_occupied;
   j["tracks_created"] = s.counters.tracks_created;
   j["tracks_dropped"] = s.counters.tracks_dropped;
   j["scan_time_us"] = {{"median", percentile(s.scan_time_s, 0.5) * 1e6},

@@ -77,6 +77,9 @@ void TrackingConfig::validate() const {
     reject("tracking.companion_speed_difference_mps", companion_speed_difference_mps,
            "a finite number >= 0");
   }
+  if (!std::isfinite(fragment_distance_m) || fragment_distance_m < 0.0) {
+    reject("tracking.fragment_distance_m", fragment_distance_m, "a finite number >= 0");
+  }
   if (!std::isfinite(max_gate_m) || max_gate_m < match_distance_m) {
     reject("tracking.max_gate_m", max_gate_m, "finite and >= match_distance_m");
   }
@@ -94,6 +97,24 @@ void DynamicFilterConfig::validate() const {
   if (!(max_time_gap_s > 0.0)) reject("max_time_gap_s", max_time_gap_s, "> 0");
   if (!(max_pose_jump_m > 0.0)) reject("max_pose_jump_m", max_pose_jump_m, "> 0");
   if (!(max_pose_jump_rad > 0.0)) reject("max_pose_jump_rad", max_pose_jump_rad, "> 0");
+}
+
+DynamicFilterConfig thesis_config() { return DynamicFilterConfig{}; }
+
+DynamicFilterConfig default_config() {
+  DynamicFilterConfig c;
+  c.velocity.measurement_variance_m2 = 0.1;
+  c.velocity.position_variance_m2 = 0.001;
+  c.classification.dynamic_weight_limit = 8;
+  c.tracking.max_extent_change_m = 0.2;
+  c.tracking.max_missed_scans = 40;
+  c.tracking.max_gate_m = 2.0;
+  c.tracking.companion_distance_m = 0.6;
+  c.tracking.fragment_distance_m = 0.3;
+  c.free_space.enabled = true;
+  c.free_space.neighbourhood_cells = 3;
+  c.free_space.memory_s = 30.0;
+  return c;
 }
 
 DynamicFilterConfig scale_to_scanner(DynamicFilterConfig config, double angle_increment_rad,
@@ -308,6 +329,9 @@ void DynamicFilter::process(const LaserScan& scan, const Pose2& sensor_pose, Fil
   out.filtered = scan;
   out.labels.resize(scan.size());
   const std::vector<std::int32_t>& seg_labels = out.segmentation.beam_labels;
+  const bool check_occupied = config_.free_space.enabled && config_.free_space.keep_long_occupied;
+  const bool absorb_fragments = update && config_.tracking.fragment_distance_m > 0.0;
+  const double slow_mps = 2.0 * config_.classification.speed_limit_mps;
   for (std::size_t b = 0; b < scan.size(); ++b) {
     const std::int32_t l = seg_labels[b];
     BeamLabel label = BeamLabel::kInvalid;
@@ -318,17 +342,43 @@ void DynamicFilter::process(const LaserScan& scan, const Pose2& sensor_pose, Fil
           break;
         case ObjectClass::kDynamic:
           label = BeamLabel::kDynamic;
-          ++out.removed_dynamic;
-          out.filtered.ranges_m[b] = std::numeric_limits<float>::quiet_NaN();
           break;
         case ObjectClass::kUnknown:
           label = BeamLabel::kUnknown;
-          ++out.removed_unknown;
-          out.filtered.ranges_m[b] = std::numeric_limits<float>::quiet_NaN();
           break;
       }
     } else if (l == kLabelNoise) {
       label = BeamLabel::kNoObject;
+    }
+    if (label == BeamLabel::kStatic || label == BeamLabel::kInvalid) {
+      out.labels[b] = label;
+      continue;
+    }
+    const double r = scan.ranges_m[b];
+    const double bearing = scan.bearing_rad(b);
+    const Eigen::Vector2d point =
+        sensor_pose.apply(Eigen::Vector2d(r * std::cos(bearing), r * std::sin(bearing)));
+    if (label == BeamLabel::kNoObject) {
+      if (absorb_fragments && near_dynamic_track(point, scan.stamp_s) &&
+          !(check_occupied &&
+            free_space_.hit_balance(point) >= config_.free_space.max_recent_hits)) {
+        label = BeamLabel::kDynamic;
+        ++counters_.beams_removed_fragments;
+      }
+    } else if (check_occupied && update &&
+               (tracks_[track_of_object_[l]].speed_mps <= slow_mps
+                    ? free_space_.hit_balance(point) >= config_.free_space.max_recent_hits
+                    : free_space_.occupied_scans(point) >=
+                          config_.free_space.long_occupied_scans)) {
+      label = BeamLabel::kStatic;
+      ++counters_.beams_kept_long_occupied;
+    }
+    if (label == BeamLabel::kDynamic) {
+      ++out.removed_dynamic;
+      out.filtered.ranges_m[b] = std::numeric_limits<float>::quiet_NaN();
+    } else if (label == BeamLabel::kUnknown) {
+      ++out.removed_unknown;
+      out.filtered.ranges_m[b] = std::numeric_limits<float>::quiet_NaN();
     }
     out.labels[b] = label;
   }
@@ -336,6 +386,23 @@ void DynamicFilter::process(const LaserScan& scan, const Pose2& sensor_pose, Fil
   counters_.beams_removed_unknown += out.removed_unknown;
   write_output(out);
   ++counters_.events[static_cast<std::size_t>(event)];
+}
+
+// Whether a point lies within fragment_distance_m of the outline (edge to edge, predicted to now)
+// of a dynamic track seen in this scan or missed for a few scans at most.
+bool DynamicFilter::near_dynamic_track(const Eigen::Vector2d& point_m, double stamp_s) const {
+  constexpr std::int32_t kMaxMissed = 2;
+  const double limit = config_.tracking.fragment_distance_m;
+  for (const Track& t : tracks_) {
+    if (t.cls.object_class != ObjectClass::kDynamic || t.missed_scans > kMaxMissed) continue;
+    const double dt = stamp_s - t.last_seen_s;
+    const Eigen::Vector2d a = t.kf[kFirst].predicted_position(dt);
+    const Eigen::Vector2d ab = t.kf[kLast].predicted_position(dt) - a;
+    const double len2 = ab.squaredNorm();
+    const double u = len2 > 0.0 ? std::clamp((point_m - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    if ((point_m - (a + u * ab)).norm() <= limit) return true;
+  }
+  return false;
 }
 
 bool DynamicFilter::similar_extent(const Observation& obs, const Track& track) const {

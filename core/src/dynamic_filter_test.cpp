@@ -729,5 +729,82 @@ TEST(DynamicFilterInput, NanRangesGiveValidLabels) {
   }
 }
 
+// --- dispel's default configuration: what it adds to the thesis's filter ------------------------
+
+TEST(DynamicFilterDefaults, FragmentsBesideADynamicWalkerAreRemovedWithIt) {
+  // A walker carrying a bag at arm's length: the bag covers fewer beams than N_min, so it is no
+  // object at all, and the thesis keeps its beams.
+  Scenario s;
+  s.walls = room(10.0, 8.0);
+  s.movers = {walker({4.0, -3.0}, {0.0, 1.0}),
+              {[](double t) { return Eigen::Vector2d(4.0, -3.0 + t + 0.38); }, 0.03}};
+  for (double fragment_distance : {0.0, 0.3}) {
+    DynamicFilterConfig config = default_config();
+    config.tracking.fragment_distance_m = fragment_distance;
+    DynamicFilter filter{config};
+    const auto st = run(s, filter, 100);
+    EXPECT_EQ(static_removed(st), 0);
+    const int walker_delay = scans_until_removed(st, 1);
+    ASSERT_GE(walker_delay, 0);
+    int bag_scans = 0, bag_removed_scans = 0;
+    for (std::size_t k = 40; k < st.size(); ++k) {  // Once the walker is dynamic.
+      const auto b = st[k].beams.find(2);
+      if (b == st[k].beams.end()) continue;
+      ASSERT_LT(b->second, config.segmentation.min_points);
+      ++bag_scans;
+      const auto r = st[k].removed.find(2);
+      if (r != st[k].removed.end() && r->second == b->second) ++bag_removed_scans;
+    }
+    ASSERT_GT(bag_scans, 30);
+    if (fragment_distance > 0.0) {
+      EXPECT_GE(bag_removed_scans, 0.9 * bag_scans);
+      EXPECT_GT(filter.counters().beams_removed_fragments, 0);
+    } else {
+      EXPECT_EQ(bag_removed_scans, 0);
+      EXPECT_EQ(filter.counters().beams_removed_fragments, 0);
+    }
+  }
+}
+
+TEST(DynamicFilterDefaults, APillarAWalkerBrushesPastKeepsItsBeams) {
+  // The walker touches the pillar in passing: for a few scans they are one object, which the
+  // walker's dynamic track follows. The pillar has stood there all along, so its beams stay.
+  Scenario s;
+  s.walls = room(10.0, 8.0);
+  s.pillars = {{{4.0, 0.0}, 0.3}};
+  s.movers = {walker({3.5, -3.0}, {0.0, 1.0})};
+  DynamicFilter filter{default_config()};
+  const auto st = run(s, filter, 120);
+  EXPECT_EQ(static_removed(st), 0);
+  const int delay = scans_until_removed(st, 1);
+  ASSERT_GE(delay, 0);
+  EXPECT_LE(delay, 20);
+}
+
+TEST(DynamicFilterDefaults, SomeoneWalkingOutOfTheDarkIntoSpaceSeenEmptyIsRemovedAtOnce) {
+  // In a hall whose walls are out of range (the thesis's 5.5 m cut) most beams return nothing;
+  // they still show the floor to be empty, so a person who walks into view from beyond the range
+  // stands in space seen free and is dynamic at once.
+  Scenario s;
+  s.geometry.range_max_m = 5.5F;
+  s.walls = room(20.0, 15.0);  // Out of range: every beam without a return is +inf.
+  s.movers = {walker({3.0, -7.0}, {0.0, 1.0})};
+  DynamicFilterConfig with = default_config();
+  DynamicFilterConfig without = with;
+  without.free_space.no_return_free_range_m = 0.0;
+  DynamicFilter a{with}, b{without};
+  const auto st_with = run(s, a, 160);
+  const auto st_without = run(s, b, 160);
+  EXPECT_EQ(static_removed(st_with), 0);
+  const int fast = scans_until_removed(st_with, 1);
+  const int slow = scans_until_removed(st_without, 1);
+  ASSERT_GE(fast, 0);
+  ASSERT_GE(slow, 0);
+  // It must first walk 0.3 m into the range (6 scans): until then the cells behind it, which every
+  // point needs around it, have not been seen.
+  EXPECT_LE(fast, 10);
+  EXPECT_GE(slow, fast + 6);
+}
+
 }  // namespace
 }  // namespace dispel

@@ -19,7 +19,19 @@ void FreeSpaceConfig::validate() const {
   }
   if (!(margin_m >= 0.0)) bad("margin_m", margin_m, ">= 0");
   if (min_free_observations < 1) bad("min_free_observations", min_free_observations, ">= 1");
-  if (max_recent_hits < 0) bad("max_recent_hits", max_recent_hits, ">= 0");
+  if (max_recent_hits < 0 || max_recent_hits > 10000) {
+    bad("max_recent_hits", max_recent_hits, "in [0, 10000]");
+  }
+  if (min_free_observations > 10000) {
+    bad("min_free_observations", min_free_observations, "<= 10000");
+  }
+  if (long_occupied_scans < 1 || long_occupied_scans > 10000) {
+    bad("long_occupied_scans", long_occupied_scans, "in [1, 10000]");
+  }
+  if (!(memory_s > 0.0)) bad("memory_s", memory_s, "> 0");
+  if (!(no_return_free_range_m >= 0.0 && std::isfinite(no_return_free_range_m))) {
+    bad("no_return_free_range_m", no_return_free_range_m, "finite and >= 0");
+  }
   if (neighbourhood_cells < 0 || neighbourhood_cells > 10) {
     bad("neighbourhood_cells", neighbourhood_cells, "in [0, 10]");
   }
@@ -64,12 +76,23 @@ bool FreeSpaceMap::known_free(const Eigen::Vector2d& point_m) const {
       std::int64_t i = 0;
       if (!index_of(point_m + Eigen::Vector2d(dx * c, dy * c), i)) return false;
       const Cell& cell = cells_[static_cast<std::size_t>(i)];
-      if (cell.free < config_.min_free_observations || cell.hits > config_.max_recent_hits) {
+      if (cell.balance > -config_.min_free_observations ||
+          stamp_s_ - cell.last_free_stamp_s > config_.memory_s) {
         return false;
       }
     }
   }
   return true;
+}
+
+int FreeSpaceMap::occupied_scans(const Eigen::Vector2d& point_m) const {
+  std::int64_t i = 0;
+  return index_of(point_m, i) ? cells_[static_cast<std::size_t>(i)].occupied : 0;
+}
+
+int FreeSpaceMap::hit_balance(const Eigen::Vector2d& point_m) const {
+  std::int64_t i = 0;
+  return index_of(point_m, i) ? cells_[static_cast<std::size_t>(i)].balance : 0;
 }
 
 void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
@@ -82,27 +105,45 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     recenter(origin);
   }
   ++scans_;
+  stamp_s_ = scan.stamp_s;
   const double step = 0.5 * config_.cell_size_m;
+  const double no_return_reach =
+      std::min(config_.no_return_free_range_m, static_cast<double>(scan.range_max_m));
+  const auto direction = [&](std::size_t b) {
+    const double bearing = sensor_pose.yaw_rad + scan.bearing_rad(b);
+    return Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+  };
+  const int cap = config_.min_free_observations + config_.max_recent_hits;
+  // Hits first: a cell hit in this scan counts as hit, whatever other beams passed through it.
   for (std::size_t b = 0; b < scan.size(); ++b) {
     if (!scan.is_valid(b)) continue;
-    const double r = scan.ranges_m[b];
-    const double bearing = sensor_pose.yaw_rad + scan.bearing_rad(b);
-    const Eigen::Vector2d dir(std::cos(bearing), std::sin(bearing));
-    std::int64_t last = -1;
-    for (double s = 0.0; s < r - config_.margin_m; s += step) {
-      std::int64_t i = 0;
-      if (!index_of(origin + s * dir, i) || i == last) continue;
-      last = i;
-      Cell& cell = cells_[static_cast<std::size_t>(i)];
-      if (cell.last_scan != scans_ && cell.free < 65535) ++cell.free;
-      cell.last_scan = scans_;
-      cell.hits = 0;
+    std::int64_t i = 0;
+    if (!index_of(origin + scan.ranges_m[b] * direction(b), i)) continue;
+    Cell& cell = cells_[static_cast<std::size_t>(i)];
+    if (cell.last_scan == scans_) continue;
+    cell.last_scan = scans_;
+    cell.balance = static_cast<std::int16_t>(std::min(cell.balance + 1, cap));
+    cell.occupied =
+        static_cast<std::int16_t>(std::min(cell.occupied + 1, 2 * config_.long_occupied_scans));
+  }
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    double free_until = 0.0;
+    if (scan.is_valid(b)) {
+      free_until = scan.ranges_m[b] - config_.margin_m;
+    } else if (std::isinf(scan.ranges_m[b]) && scan.ranges_m[b] > 0.0) {
+      free_until = no_return_reach;
     }
-    std::int64_t hit = 0;
-    if (index_of(origin + r * dir, hit)) {
-      Cell& cell = cells_[static_cast<std::size_t>(hit)];
-      if (cell.last_hit_scan != scans_ && cell.hits < 65535) ++cell.hits;
-      cell.last_hit_scan = scans_;
+    if (!(free_until > 0.0)) continue;
+    const Eigen::Vector2d dir = direction(b);
+    for (double s = 0.0; s < free_until; s += step) {
+      std::int64_t i = 0;
+      if (!index_of(origin + s * dir, i)) continue;
+      Cell& cell = cells_[static_cast<std::size_t>(i)];
+      if (cell.last_scan == scans_) continue;
+      cell.last_scan = scans_;
+      cell.balance = static_cast<std::int16_t>(std::max(cell.balance - 1, -cap));
+      cell.occupied = static_cast<std::int16_t>(std::max(cell.occupied - 1, 0));
+      cell.last_free_stamp_s = scan.stamp_s;
     }
   }
 }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <stdexcept>
 
 namespace dispel {
@@ -29,8 +30,13 @@ TEST(FreeSpaceMap, SpaceSeenThroughIsFreeButNotTheSurfaceOrBeyondIt) {
   EXPECT_FALSE(map.known_free({3.9, 0.0}));   // Within the margin of the surface.
   EXPECT_FALSE(map.known_free({5.0, 0.0}));   // Behind it.
   EXPECT_FALSE(map.known_free({-1.0, 0.0}));  // Never in view.
-  // Something now stands at 2 m. For a few scans its cell is still "free" (it may be passing
-  // through); after max_recent_hits scans in a row it stands there.
+  // Something now stands at 2 m. Seen through in only 3 scans, one hit is enough to make its cell
+  // not free.
+  map.add_scan(ring(2.0F), Pose2{});
+  EXPECT_FALSE(map.known_free({2.0, 0.0}));
+  // Seen through for long, a cell stays free while something crosses it for up to
+  // max_recent_hits scans (a walker), and not once something stands there longer.
+  for (int k = 0; k < 50; ++k) map.add_scan(ring(4.0F), Pose2{});
   for (int k = 0; k < c.max_recent_hits; ++k) map.add_scan(ring(2.0F), Pose2{});
   EXPECT_TRUE(map.known_free({2.0, 0.0}));
   map.add_scan(ring(2.0F), Pose2{});
@@ -38,6 +44,49 @@ TEST(FreeSpaceMap, SpaceSeenThroughIsFreeButNotTheSurfaceOrBeyondIt) {
   EXPECT_TRUE(map.known_free({1.0, 0.0}));
   map.clear();
   EXPECT_FALSE(map.known_free({1.0, 0.0}));
+}
+
+TEST(FreeSpaceMap, BeamsWithoutReturnSeeThroughUpToTheirReach) {
+  FreeSpaceConfig c;
+  c.no_return_free_range_m = 6.0;
+  FreeSpaceMap map(c);
+  LaserScan nothing = ring(std::numeric_limits<float>::infinity());
+  for (int k = 0; k < 3; ++k) map.add_scan(nothing, Pose2{});
+  EXPECT_TRUE(map.known_free({5.0, 0.0}));
+  EXPECT_FALSE(map.known_free({7.0, 0.0}));  // Beyond the reach.
+  // The scan's own maximum range caps the reach (a scanner cut to 5.5 m).
+  FreeSpaceMap capped(c);
+  nothing.range_max_m = 4.0F;
+  for (int k = 0; k < 3; ++k) capped.add_scan(nothing, Pose2{});
+  EXPECT_TRUE(capped.known_free({3.0, 0.0}));
+  EXPECT_FALSE(capped.known_free({5.0, 0.0}));
+  // Invalid measurements (NaN) say nothing; with the reach 0, neither does "no return".
+  FreeSpaceMap unknown(c);
+  LaserScan masked = ring(std::numeric_limits<float>::quiet_NaN());
+  for (int k = 0; k < 3; ++k) unknown.add_scan(masked, Pose2{});
+  EXPECT_FALSE(unknown.known_free({1.0, 0.0}));
+  c.no_return_free_range_m = 0.0;
+  FreeSpaceMap off(c);
+  for (int k = 0; k < 3; ++k) off.add_scan(ring(std::numeric_limits<float>::infinity()), Pose2{});
+  EXPECT_FALSE(off.known_free({1.0, 0.0}));
+}
+
+TEST(FreeSpaceMap, ASurfaceSeenThroughNowAndThenIsNeverFree) {
+  // Beams through a cell that another beam of the same scan hits: the cell is not free; and a
+  // dropout now and then on a surface does not make it free either.
+  FreeSpaceConfig c;
+  c.neighbourhood_cells = 0;
+  FreeSpaceMap map(c);
+  LaserScan s = ring(4.0F);
+  s.ranges_m[180] = 2.0F;                                    // Straight ahead, a return at 2 m ...
+  s.ranges_m[181] = std::numeric_limits<float>::infinity();  // ... beside a beam with none.
+  for (int k = 0; k < 5; ++k) map.add_scan(s, Pose2{});
+  EXPECT_FALSE(map.known_free({2.0, 0.0}));
+  EXPECT_TRUE(map.known_free({1.0, 0.0}));
+  LaserScan dropout = s;
+  dropout.ranges_m[180] = std::numeric_limits<float>::infinity();
+  for (int k = 0; k < 200; ++k) map.add_scan(k % 4 == 0 ? dropout : s, Pose2{});
+  EXPECT_FALSE(map.known_free({2.0, 0.0}));
 }
 
 TEST(FreeSpaceMap, NeedsEnoughObservationsAndFollowsTheSensorPose) {

@@ -98,11 +98,21 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
   } catch (const YAML::Exception& e) {
     fail(origin, std::string("not valid YAML: ") + e.what());
   }
-  DynamicFilterConfig c;
+  DynamicFilterConfig c = default_config();
   if (root.IsNull()) {
     // An empty file: all defaults.
   } else {
     Binder b(origin);
+    // The starting point, whatever its place in the file: every other key changes it.
+    if (root.IsMap() && root["preset"]) {
+      const std::string preset = scalar<std::string>(root["preset"], "preset", origin, "a word");
+      if (preset == "thesis") {
+        c = thesis_config();
+      } else if (preset != "default") {
+        fail(origin, "preset must be one of default, thesis, got '" + preset + "'");
+      }
+    }
+    b.custom("preset", [](const YAML::Node&, const std::string&) {});
     SegmentationConfig& s = c.segmentation;
     b.section("segmentation");
     b.number("segmentation.cluster_gap_m", s.cluster_gap_m);
@@ -135,6 +145,7 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
     b.number("tracking.max_extent_change_m", t.max_extent_change_m);
     b.number("tracking.companion_distance_m", t.companion_distance_m);
     b.number("tracking.companion_speed_difference_mps", t.companion_speed_difference_mps);
+    b.number("tracking.fragment_distance_m", t.fragment_distance_m);
     VelocityFilterConfig& v = c.velocity;
     b.section("velocity");
     b.number("velocity.position_variance_m2", v.position_variance_m2);
@@ -163,6 +174,10 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
     b.number("free_space.margin_m", f.margin_m);
     b.integer("free_space.min_free_observations", f.min_free_observations);
     b.integer("free_space.max_recent_hits", f.max_recent_hits);
+    b.number("free_space.no_return_free_range_m", f.no_return_free_range_m);
+    b.number("free_space.memory_s", f.memory_s);
+    b.boolean("free_space.keep_long_occupied", f.keep_long_occupied);
+    b.integer("free_space.long_occupied_scans", f.long_occupied_scans);
     b.integer("free_space.neighbourhood_cells", f.neighbourhood_cells);
     b.number("free_space.min_object_share", f.min_object_share);
     b.number("max_time_gap_s", c.max_time_gap_s);

@@ -21,19 +21,20 @@ void expect_error(const std::string& yaml, const std::string& expected) {
   }
 }
 
-TEST(ConfigYaml, ShippedDefaultFileHoldsExactlyTheDefaults) {
-  const DynamicFilterConfig loaded = load_filter_config(default_yaml());
-  const DynamicFilterConfig d;
+// Every field of two configurations is equal.
+void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d) {
   EXPECT_EQ(loaded.segmentation.cluster_gap_m, d.segmentation.cluster_gap_m);
   EXPECT_EQ(loaded.segmentation.min_points, d.segmentation.min_points);
   EXPECT_EQ(loaded.segmentation.gap_metric, d.segmentation.gap_metric);
-  EXPECT_EQ(loaded.segmentation.masked_sectors.size(), 0u);
+  EXPECT_EQ(loaded.segmentation.masked_sectors.size(), d.segmentation.masked_sectors.size());
   EXPECT_EQ(loaded.tracking.match_distance_m, d.tracking.match_distance_m);
   EXPECT_EQ(loaded.tracking.matching, d.tracking.matching);
   EXPECT_EQ(loaded.tracking.max_missed_scans, d.tracking.max_missed_scans);
   EXPECT_EQ(loaded.tracking.max_gate_m, d.tracking.max_gate_m);
   EXPECT_EQ(loaded.tracking.max_extent_change_m, d.tracking.max_extent_change_m);
   EXPECT_EQ(loaded.tracking.companion_distance_m, d.tracking.companion_distance_m);
+  EXPECT_EQ(loaded.tracking.fragment_distance_m, d.tracking.fragment_distance_m);
+  EXPECT_EQ(loaded.tracking.inherit_on_split, d.tracking.inherit_on_split);
   EXPECT_EQ(loaded.tracking.companion_speed_difference_mps,
             d.tracking.companion_speed_difference_mps);
   EXPECT_EQ(loaded.velocity.position_variance_m2, d.velocity.position_variance_m2);
@@ -57,12 +58,45 @@ TEST(ConfigYaml, ShippedDefaultFileHoldsExactlyTheDefaults) {
   EXPECT_EQ(loaded.free_space.extent_m, d.free_space.extent_m);
   EXPECT_EQ(loaded.free_space.margin_m, d.free_space.margin_m);
   EXPECT_EQ(loaded.free_space.min_free_observations, d.free_space.min_free_observations);
+  EXPECT_EQ(loaded.free_space.no_return_free_range_m, d.free_space.no_return_free_range_m);
   EXPECT_EQ(loaded.free_space.max_recent_hits, d.free_space.max_recent_hits);
+  EXPECT_EQ(loaded.free_space.memory_s, d.free_space.memory_s);
+  EXPECT_EQ(loaded.free_space.keep_long_occupied, d.free_space.keep_long_occupied);
+  EXPECT_EQ(loaded.free_space.long_occupied_scans, d.free_space.long_occupied_scans);
   EXPECT_EQ(loaded.free_space.neighbourhood_cells, d.free_space.neighbourhood_cells);
   EXPECT_EQ(loaded.free_space.min_object_share, d.free_space.min_object_share);
   EXPECT_EQ(loaded.max_time_gap_s, d.max_time_gap_s);
   EXPECT_EQ(loaded.max_pose_jump_m, d.max_pose_jump_m);
   EXPECT_EQ(loaded.max_pose_jump_rad, d.max_pose_jump_rad);
+}
+
+TEST(ConfigYaml, ShippedDefaultFileHoldsExactlyTheDefaults) {
+  expect_same(load_filter_config(default_yaml()), default_config());
+  expect_same(parse_filter_config("", "empty.yaml"), default_config());
+}
+
+TEST(ConfigYaml, ShippedThesisFileHoldsExactlyTheThesisParameters) {
+  expect_same(load_filter_config(std::string(DISPEL_SOURCE_DIR) + "/config/thesis.yaml"),
+              thesis_config());
+  const DynamicFilterConfig t = thesis_config();
+  EXPECT_EQ(t.classification.dynamic_weight_limit, 18);
+  EXPECT_EQ(t.velocity.measurement_variance_m2, 15.0);
+  EXPECT_FALSE(t.free_space.enabled);
+  EXPECT_EQ(t.tracking.companion_distance_m, 0.0);
+  EXPECT_EQ(t.tracking.fragment_distance_m, 0.0);
+}
+
+TEST(ConfigYaml, PresetIsTheStartingPointWhereverItStands) {
+  // The preset applies first even when written after other keys.
+  const DynamicFilterConfig c = parse_filter_config(
+      "classification: {dynamic_weight_limit: 5}\npreset: thesis\n", "test.yaml");
+  EXPECT_EQ(c.classification.dynamic_weight_limit, 5);
+  EXPECT_EQ(c.velocity.measurement_variance_m2, thesis_config().velocity.measurement_variance_m2);
+  EXPECT_FALSE(c.free_space.enabled);
+  const DynamicFilterConfig d = parse_filter_config("preset: default\n", "test.yaml");
+  expect_same(d, default_config());
+  expect_error("preset: thesys", "preset must be one of default, thesis, got 'thesys'");
+  expect_error("preset: [thesis]", "preset must be a word");
 }
 
 TEST(ConfigYaml, ValuesAreReadIntoTheirFields) {
@@ -82,6 +116,7 @@ TEST(ConfigYaml, ValuesAreReadIntoTheirFields) {
   EXPECT_EQ(c.classification.static_weight_limit, 20);
   EXPECT_EQ(c.max_pose_jump_m, 2.0);
   EXPECT_EQ(c.segmentation.min_points, 8);  // Untouched keys keep their defaults.
+  EXPECT_EQ(c.tracking.max_missed_scans, default_config().tracking.max_missed_scans);
   EXPECT_NO_THROW(parse_filter_config("", "empty.yaml"));
 }
 

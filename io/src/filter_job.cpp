@@ -55,7 +55,7 @@ rosbag::compression::CompressionType bag_compression(Compression c) {
 }
 
 DynamicFilterConfig base_config(const FilterJobOptions& o) {
-  if (!o.config_path) return DynamicFilterConfig{};
+  if (!o.config_path) return default_config();
   try {
     return load_filter_config(*o.config_path);
   } catch (const ConfigError& e) {

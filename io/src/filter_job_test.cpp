@@ -130,8 +130,10 @@ TEST(FilterJobOnRecordedBag, RemovesWalkersKeepsWallsAndCopiesEveryMessage) {
   RecordProperty("walker_beams_removed", std::to_string(removed));
   ASSERT_GT(wall_beams, 30000);
   ASSERT_GT(walker_beams, 10000);
-  EXPECT_GE(kept, 0.99);     // Measured 0.996.
-  EXPECT_GE(removed, 0.70);  // Measured 0.741; legs beyond 4 m cover under 4 beams.
+  // dispel's default configuration: measured 1.000 and 0.919 (the thesis's filter: 0.996 and
+  // 0.741; legs beyond 4 m cover under 4 beams, the scaled N_min, and are not objects at all).
+  EXPECT_GE(kept, 0.99);
+  EXPECT_GE(removed, 0.88);
   std::remove(o.output.c_str());
 }
 

@@ -13,7 +13,8 @@ namespace dispel::sim {
 namespace {
 
 constexpr double kDeg = kPi / 180.0;
-constexpr double kStep = 0.01;  // Physics step, seconds.
+constexpr double kStep = 0.01;             // Physics step, seconds.
+constexpr double kRobotClearance_m = 0.6;  // People keep this far from the robot's centre.
 
 constexpr auto reject = reject_field;
 
@@ -345,7 +346,11 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
           r = std::numeric_limits<float>::infinity();
           continue;
         }
-        r = std::max(0.0F, r + static_cast<float>(lidar.range_noise_m * n01(rng)));
+        r += static_cast<float>(lidar.range_noise_m * n01(rng));
+        if (r < geometry.range_min_m) {  // Noise cannot make a return nearer than the minimum.
+          r = std::numeric_limits<float>::infinity();
+          continue;
+        }
         std::int32_t actor = -1;
         const std::int32_t id = hit[i];
         if (id >= static_segments && id < segment_count) {
@@ -392,8 +397,21 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
       const Eigen::Vector2d to = s.path.target() - s.position;
       const double d = to.norm();
       const double stepd = s.spec.speed_mps * kStep;
-      if (d > 1e-9) s.heading = std::atan2(to.y(), to.x());
-      s.position += to * std::min(1.0, stepd / std::max(d, 1e-9));
+      Eigen::Vector2d stride = to * std::min(1.0, stepd / std::max(d, 1e-9));
+      // People do not walk into the robot: they step aside from it when it comes nearer than
+      // kRobotClearance_m and walk around it (along the circle) when their way leads through it.
+      const Eigen::Vector2d from_robot = s.position - pose.translation();
+      const double dr = from_robot.norm();
+      if (dr < kRobotClearance_m) {
+        stride = stepd * (dr > 1e-9 ? Eigen::Vector2d(from_robot / dr)
+                                    : Eigen::Vector2d(std::cos(s.heading), std::sin(s.heading)));
+      } else if ((from_robot + stride).norm() < kRobotClearance_m) {
+        Eigen::Vector2d around(-from_robot.y() / dr, from_robot.x() / dr);
+        if (around.dot(stride) < 0.0) around = -around;
+        stride = stepd * around;
+      }
+      if (stride.norm() > 1e-12) s.heading = std::atan2(stride.y(), stride.x());
+      s.position += stride;
       s.moving = true;
       s.gait_phase += 2.0 * kPi * stepd / 1.4;  // A stride of 1.4 m (two steps).
       if (s.path.advance_if_reached(s.position, 1e-6)) s.pause_left = s.spec.pause_s;

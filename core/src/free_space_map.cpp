@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -106,7 +107,7 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
   }
   ++scans_;
   stamp_s_ = scan.stamp_s;
-  const double step = 0.5 * config_.cell_size_m;
+  const double c = config_.cell_size_m;
   const double no_return_reach =
       std::min(config_.no_return_free_range_m, static_cast<double>(scan.range_max_m));
   const auto direction = [&](std::size_t b) {
@@ -134,16 +135,38 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
       free_until = no_return_reach;
     }
     if (!(free_until > 0.0)) continue;
+    // Every cell the beam crosses up to free_until, each once (Amanatides and Woo's traversal,
+    // in cell units).
     const Eigen::Vector2d dir = direction(b);
-    for (double s = 0.0; s < free_until; s += step) {
-      std::int64_t i = 0;
-      if (!index_of(origin + s * dir, i)) continue;
-      Cell& cell = cells_[static_cast<std::size_t>(i)];
-      if (cell.last_scan == scans_) continue;
-      cell.last_scan = scans_;
-      cell.balance = static_cast<std::int16_t>(std::max(cell.balance - 1, -cap));
-      cell.occupied = static_cast<std::int16_t>(std::max(cell.occupied - 1, 0));
-      cell.last_free_stamp_s = scan.stamp_s;
+    const double fx = (origin.x() - origin_.x()) / c, fy = (origin.y() - origin_.y()) / c;
+    const double cx = std::floor(fx), cy = std::floor(fy);
+    auto ix = static_cast<std::int64_t>(cx);
+    auto iy = static_cast<std::int64_t>(cy);
+    const int step_x = dir.x() > 0.0 ? 1 : -1, step_y = dir.y() > 0.0 ? 1 : -1;
+    const double inf = std::numeric_limits<double>::infinity();
+    const double delta_x = dir.x() != 0.0 ? std::abs(1.0 / dir.x()) : inf;
+    const double delta_y = dir.y() != 0.0 ? std::abs(1.0 / dir.y()) : inf;
+    double next_x = dir.x() != 0.0 ? (step_x > 0 ? cx + 1.0 - fx : fx - cx) * delta_x : inf;
+    double next_y = dir.y() != 0.0 ? (step_y > 0 ? cy + 1.0 - fy : fy - cy) * delta_y : inf;
+    const double length = free_until / c;
+    double t = 0.0;
+    while (t < length && ix >= 0 && iy >= 0 && ix < cells_per_side_ && iy < cells_per_side_) {
+      Cell& cell = cells_[static_cast<std::size_t>(iy * cells_per_side_ + ix)];
+      if (cell.last_scan != scans_) {
+        cell.last_scan = scans_;
+        cell.balance = static_cast<std::int16_t>(std::max(cell.balance - 1, -cap));
+        cell.occupied = static_cast<std::int16_t>(std::max(cell.occupied - 1, 0));
+        cell.last_free_stamp_s = scan.stamp_s;
+      }
+      if (next_x < next_y) {
+        t = next_x;
+        next_x += delta_x;
+        ix += step_x;
+      } else {
+        t = next_y;
+        next_y += delta_y;
+        iy += step_y;
+      }
     }
   }
 }

@@ -89,6 +89,29 @@ TEST(FreeSpaceMap, ASurfaceSeenThroughNowAndThenIsNeverFree) {
   EXPECT_FALSE(map.known_free({2.0, 0.0}));
 }
 
+TEST(FreeSpaceMap, ABeamFreesEveryCellItCrossesAndNoOther) {
+  FreeSpaceConfig c;
+  c.neighbourhood_cells = 0;
+  c.min_free_observations = 1;
+  FreeSpaceMap map(c);
+  LaserScan one;
+  one.angle_min_rad = 0.5236;  // A single beam at 30 degrees, from an off-grid position.
+  one.angle_increment_rad = 0.01;
+  one.range_min_m = 0.05F;
+  one.range_max_m = 30.0F;
+  one.ranges_m = {5.0F};
+  const Pose2 pose{0.337, -0.051, 0.2};
+  map.add_scan(one, pose);
+  const double bearing = pose.yaw_rad + one.angle_min_rad;
+  const Eigen::Vector2d dir(std::cos(bearing), std::sin(bearing));
+  const Eigen::Vector2d side(-dir.y(), dir.x());
+  for (double s = 0.0; s < 5.0 - c.margin_m - 0.01; s += 0.01) {
+    ASSERT_TRUE(map.known_free(pose.translation() + s * dir)) << s;
+    EXPECT_FALSE(map.known_free(pose.translation() + s * dir + 0.25 * side)) << s;
+  }
+  EXPECT_FALSE(map.known_free(pose.translation() + 4.9 * dir));
+}
+
 TEST(FreeSpaceMap, NeedsEnoughObservationsAndFollowsTheSensorPose) {
   FreeSpaceConfig c;
   c.min_free_observations = 2;

@@ -13,8 +13,10 @@ namespace dispel::sim {
 namespace {
 
 constexpr double kDeg = kPi / 180.0;
-constexpr double kStep = 0.01;             // Physics step, seconds.
-constexpr double kRobotClearance_m = 0.6;  // People keep this far from the robot's centre.
+constexpr double kStep = 0.01;                   // Physics step, seconds.
+constexpr double kRobotClearance_m = 0.6;        // People keep this far from the robot's centre.
+constexpr double kMaxAcceleration = 0.5;         // m/s^2, the robot's.
+constexpr double kMaxAngularAcceleration = 1.5;  // rad/s^2.
 
 constexpr auto reject = reject_field;
 
@@ -369,17 +371,20 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
       out.scans.push_back(std::move(frame));
     }
 
-    // Robot: steer toward the next waypoint, slow down while turning.
-    v = w = 0.0;
+    // Robot: steer toward the next waypoint, slow down while turning; its motors change speed
+    // and turn rate at most kMaxAcceleration and kMaxAngularAcceleration.
+    double v_cmd = 0.0, w_cmd = 0.0;
     if (!robot_path.done()) {
       robot_path.advance_if_reached(pose.translation(), 0.15);
       if (!robot_path.done()) {
         const Eigen::Vector2d to = robot_path.target() - pose.translation();
         const double err = wrap_angle(std::atan2(to.y(), to.x()) - pose.yaw_rad);
-        w = std::clamp(2.0 * err, -0.6, 0.6);
-        v = scenario.robot.speed_mps * std::max(0.0, std::cos(err));
+        w_cmd = std::clamp(2.0 * err, -0.6, 0.6);
+        v_cmd = scenario.robot.speed_mps * std::max(0.0, std::cos(err));
       }
     }
+    v += std::clamp(v_cmd - v, -kMaxAcceleration * kStep, kMaxAcceleration * kStep);
+    w += std::clamp(w_cmd - w, -kMaxAngularAcceleration * kStep, kMaxAngularAcceleration * kStep);
     pose = pose * Pose2{v * kStep, 0.0, w * kStep};
 
     // Actors.

@@ -133,7 +133,7 @@ TEST(Simulator, RobotFollowsTheLawnmowerAndOdometryDriftsFromTheTruth) {
     max_x = std::max(max_x, k.true_pose.x_m);
   }
   EXPECT_NEAR(max_x, 6.0 + 1.0, 0.3);  // Lanes of 6 m plus the U-turn's radius.
-  EXPECT_NEAR(max_y, 4.0, 0.3);        // Three lanes 2 m apart.
+  EXPECT_NEAR(max_y, 4.0, 0.4);  // Three lanes 2 m apart; limited acceleration overshoots a bit.
   const SensorSample& end = out.sensors.back();
   const double drift = (end.odom_pose.translation() - end.true_pose.translation()).norm();
   EXPECT_GT(drift, 0.001);  // The wheels have scale error and noise...

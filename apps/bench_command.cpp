@@ -111,8 +111,16 @@ void print_summary(const std::vector<Result>& results) {
   const Result* filter_100k = find(results, "filter_pipeline", 100000);
   const Result* filter_11k = find(results, "filter_pipeline", 11000);
   if (filter_thesis != nullptr) {
-    std::printf("whole filter per 1617-beam scan: %.2f us median\n",
+    std::printf("whole filter per 1617-beam scan: %.2f us median (the thesis's configuration)\n",
                 filter_thesis->median_ns / 1e3);
+  }
+  if (const Result* d = find(results, "filter_pipeline_default", 1617)) {
+    std::printf("whole filter per 1617-beam scan: %.2f us median (dispel's default)\n",
+                d->median_ns / 1e3);
+  }
+  if (const Result* ct = find(results, "odometry_ct_step", 1)) {
+    std::printf("one CT odometry step (predict + wheel update): %.2f us median\n",
+                ct->median_ns / 1e3);
   }
   if (filter_11k != nullptr && filter_100k != nullptr) {
     std::printf("filter time from 11000 to 100000 beams grows %.2fx (linear: 9.1x)\n",

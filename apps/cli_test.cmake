@@ -165,3 +165,38 @@ expect_error_no_output("no /scan_truth" ${WORK_DIR}/x.bag
 expect_error_no_output("no /scan_labels or /scan_filtered" ${WORK_DIR}/x.bag
                        eval --truth ${sim} --result ${sim})
 message(STATUS "dispel sim and eval contract holds")
+
+# dispel odom and dispel eval-trajectory: the simulated run's wheels and IMU against its truth.
+set(traj ${WORK_DIR}/trajectory.csv)
+set(truth ${WORK_DIR}/truth.csv)
+run_dispel(rc so se odom ${sim} -o ${traj} --model ct --truth-csv ${truth} --json)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${traj} OR NOT EXISTS ${truth})
+  message(FATAL_ERROR "dispel odom failed (${rc}): ${se}")
+endif()
+string(JSON model GET "${so}" model)
+string(JSON wheel_source GET "${so}" wheel_source)
+string(JSON rows GET "${so}" rows)
+if(NOT model STREQUAL "ct" OR NOT wheel_source STREQUAL "/wheels" OR rows LESS 200)
+  message(FATAL_ERROR "bad odom statistics: ${so}")
+endif()
+run_dispel(rc so se eval-trajectory --truth ${truth} --estimate ${traj} --json)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "dispel eval-trajectory failed (${rc}): ${se}")
+endif()
+foreach(key rmse_position_m rmse_yaw_rad final_position_error_m final_yaw_error_rad path_length_m)
+  string(JSON value GET "${so}" ${key})
+  if(value STREQUAL "" OR value MATCHES "null")
+    message(FATAL_ERROR "eval-trajectory: no ${key} in ${so}")
+  endif()
+endforeach()
+string(JSON rmse GET "${so}" rmse_position_m)
+if(rmse GREATER 0.5)
+  message(FATAL_ERROR "odometry of a 4 s simulated run is off by ${rmse} m: ${so}")
+endif()
+expect_error_no_output("no_such.bag: not a readable ROS 1 bag" ${WORK_DIR}/x.csv
+                       odom ${WORK_DIR}/no_such.bag -o ${WORK_DIR}/x.csv)
+expect_error_no_output("which topic holds the wheel speeds" ${WORK_DIR}/x.csv
+                       odom ${BAG} -o ${WORK_DIR}/x.csv)
+expect_error_no_output("cannot open the file" ${WORK_DIR}/x.csv
+                       eval-trajectory --truth ${WORK_DIR}/missing.csv --estimate ${traj})
+message(STATUS "dispel odom and eval-trajectory contract holds")

@@ -6,6 +6,7 @@
 #include "bench_command.hpp"
 #ifdef DISPEL_HAVE_IO
 #include "filter_command.hpp"
+#include "odom_commands.hpp"
 #include "sim_commands.hpp"
 #endif
 
@@ -75,6 +76,40 @@ int main(int argc, char** argv) {
   eval_cmd->add_option("--scan-topic", evaluation.scan_topic, "LaserScan topic")
       ->capture_default_str();
   eval_cmd->add_flag("--json", evaluation.json, "Print JSON");
+
+  dispel::apps::OdomCommandOptions odom;
+  std::string odom_config, odom_model;
+  CLI::App* odom_cmd =
+      app.add_subcommand("odom", "Fuse wheel speeds and IMU yaw rate (UKF) into a trajectory CSV");
+  odom_cmd->add_option("input", odom.job.input, "IN.bag (or give --wheels-csv)");
+  odom_cmd->add_option("-o,--output", odom.job.output, "TRAJECTORY.csv to write")->required();
+  odom_cmd->add_option("--model", odom_model, "ct, ct_euler, omni or dead_reckoning")
+      ->check(CLI::IsMember({"ct", "ct_euler", "omni", "dead_reckoning"}));
+  odom_cmd->add_option("--config", odom_config, "YAML with an odometry: section");
+  odom_cmd->add_option("--wheels-csv", odom.job.wheels_csv, "W.csv with t,v_left,v_right");
+  odom_cmd->add_option("--imu-csv", odom.job.imu_csv, "I.csv with t,yaw_rate");
+  odom_cmd->add_option("--wheel-topic", odom.job.wheel_topic,
+                       "JointState or Odometry topic (default: /wheels or the only one)");
+  odom_cmd->add_option("--imu-topic", odom.job.imu_topic,
+                       "Imu topic (default: the only one), or none");
+  odom_cmd->add_option("--truth-topic", odom.job.truth_topic, "Odometry topic for --truth-csv")
+      ->capture_default_str();
+  odom_cmd->add_option("--truth-csv", odom.job.truth_csv,
+                       "Also write the truth topic as t,x,y,yaw here");
+  odom_cmd->add_flag("--json", odom.json, "Print statistics as JSON");
+
+  dispel::apps::EvalTrajectoryOptions eval_trajectory;
+  CLI::App* eval_trajectory_cmd = app.add_subcommand(
+      "eval-trajectory", "Compare a trajectory CSV with a true one (t,x,y,yaw columns)");
+  eval_trajectory_cmd->add_option("--truth", eval_trajectory.truth, "TRUTH.csv")->required();
+  eval_trajectory_cmd->add_option("--estimate", eval_trajectory.estimate, "TRAJECTORY.csv")
+      ->required();
+  eval_trajectory_cmd
+      ->add_option("--align-first", eval_trajectory.align_first_m,
+                   "Move the estimate rigidly onto the truth over its first METRES of path "
+                   "(for a truth in another frame, e.g. GPS)")
+      ->check(CLI::NonNegativeNumber);
+  eval_trajectory_cmd->add_flag("--json", eval_trajectory.json, "Print JSON");
 #endif
 
   try {
@@ -91,6 +126,12 @@ int main(int argc, char** argv) {
     }
     if (*sim_cmd) return dispel::apps::run_sim(sim);
     if (*eval_cmd) return dispel::apps::run_eval(evaluation);
+    if (*odom_cmd) {
+      if (!odom_config.empty()) odom.job.config_path = odom_config;
+      if (!odom_model.empty()) odom.job.model = odom_model;
+      return dispel::apps::run_odom(odom);
+    }
+    if (*eval_trajectory_cmd) return dispel::apps::run_eval_trajectory(eval_trajectory);
 #endif
   } catch (const std::exception& e) {
     std::cerr << "dispel: " << e.what() << "\n";

@@ -6,8 +6,11 @@
 #include <map>
 #include <random>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "dispel/core/dynamic_filter.hpp"
+#include "dispel/core/odometry_fusion.hpp"
 #include "dispel/core/pose2.hpp"
 #include "dispel/core/reference_dbscan.hpp"
 #include "dispel/core/segmentation.hpp"
@@ -108,14 +111,16 @@ void segmentation(benchmark::State& state) {
   state.counters["objects"] = static_cast<double>(out.objects.size());
 }
 
-// The whole filter on a stream of scans: segmentation, tracking, classification, output.
+// The whole filter on a stream of scans: segmentation, tracking, classification, output; with the
+// thesis's configuration or dispel's default (which adds the free-space grid).
+template <bool kDefaultConfig>
 void filter_pipeline(benchmark::State& state) {
   static std::map<std::int32_t, std::vector<LaserScan>> cache;
   const auto beams = static_cast<std::int32_t>(state.range(0));
   auto it = cache.find(beams);
   if (it == cache.end()) it = cache.emplace(beams, hall_sequence(beams, 100)).first;
   std::vector<LaserScan>& frames = it->second;
-  DynamicFilter filter{DynamicFilterConfig{}};
+  DynamicFilter filter{kDefaultConfig ? default_config() : thesis_config()};
   FilterResult out;
   double stamp = 0.0;
   std::size_t k = 0;
@@ -149,6 +154,27 @@ void dbscan(benchmark::State& state) {
   state.counters["objects"] = out.cluster_count;
 }
 
+// One odometry fusion step: predict to the measurement's time stamp and fuse one wheel
+// measurement (50 Hz, noisy wheels on a gentle curve). The counter "beams" is 1 so that
+// `dispel bench` reports the time per step.
+template <OdometryModel kModel>
+void odometry_step(benchmark::State& state) {
+  OdometryConfig config;
+  config.model = kModel;
+  OdometryFusion filter(config);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  std::vector<std::pair<double, double>> wheels(1024);
+  for (auto& w : wheels) w = {0.45 + noise(rng), 0.55 + noise(rng)};
+  double t = 0.0;
+  std::size_t k = 0;
+  for (auto _ : state) {
+    const auto& [left, right] = wheels[k++ % wheels.size()];
+    benchmark::DoNotOptimize(filter.add_wheels(t += 0.02, left, right));
+  }
+  state.counters["beams"] = 1;
+}
+
 }  // namespace
 
 void register_benchmarks(const RunSettings& settings) {
@@ -165,10 +191,13 @@ void register_benchmarks(const RunSettings& settings) {
                 ->Arg(11000)
                 ->Arg(100000)
                 ->Arg(1000000));
-  configure(benchmark::RegisterBenchmark("filter_pipeline", filter_pipeline)
+  configure(benchmark::RegisterBenchmark("filter_pipeline", filter_pipeline<false>)
                 ->Arg(1617)
                 ->Arg(11000)
                 ->Arg(100000));
+  configure(benchmark::RegisterBenchmark("filter_pipeline_default", filter_pipeline<true>)
+                ->Arg(1617)
+                ->Arg(11000));
   configure(benchmark::RegisterBenchmark("reference_dbscan", dbscan<NeighbourSearch::kBruteForce>)
                 ->Arg(1617)
                 ->Arg(11000));
@@ -176,6 +205,10 @@ void register_benchmarks(const RunSettings& settings) {
                 ->Arg(1617)
                 ->Arg(11000)
                 ->Arg(100000));
+  // Odometry fusion: one UKF step (predict + wheel update), CT model and the omni baseline.
+  configure(benchmark::RegisterBenchmark("odometry_ct_step", odometry_step<OdometryModel::kCt>));
+  configure(
+      benchmark::RegisterBenchmark("odometry_omni_step", odometry_step<OdometryModel::kOmni>));
 }
 
 }  // namespace dispel::bench

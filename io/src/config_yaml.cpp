@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -113,6 +114,8 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
       }
     }
     b.custom("preset", [](const YAML::Node&, const std::string&) {});
+    // Read by `dispel odom` (parse_odometry_settings), so that one file can configure both.
+    b.custom("odometry", [](const YAML::Node&, const std::string&) {});
     SegmentationConfig& s = c.segmentation;
     b.section("segmentation");
     b.number("segmentation.cluster_gap_m", s.cluster_gap_m);
@@ -193,12 +196,98 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
   return c;
 }
 
-DynamicFilterConfig load_filter_config(const std::string& path) {
+namespace {
+
+std::string read_text(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open the configuration file");
   std::stringstream text;
   text << in.rdbuf();
-  return parse_filter_config(text.str(), path);
+  return text.str();
+}
+
+}  // namespace
+
+DynamicFilterConfig load_filter_config(const std::string& path) {
+  return parse_filter_config(read_text(path), path);
+}
+
+OdometrySettings parse_odometry_settings(const std::string& yaml_text, const std::string& origin) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    fail(origin, std::string("not valid YAML: ") + e.what());
+  }
+  OdometrySettings settings;
+  if (!root.IsNull() && !root.IsMap()) fail(origin, "the file must be a mapping");
+  if (root.IsNull() || !root["odometry"]) return settings;  // The filter's keys are not ours.
+  OdometryConfig& c = settings.filter;
+  Binder b(origin);
+  b.choice<OdometryModel>("odometry.model", c.model,
+                          {{"ct", OdometryModel::kCt},
+                           {"ct_euler", OdometryModel::kCtEuler},
+                           {"omni", OdometryModel::kOmni}});
+  b.number("odometry.track_width_m", c.track_width_m);
+  b.number("odometry.linear_velocity_variance_m2ps3", c.linear_velocity_variance_m2ps3);
+  b.number("odometry.yaw_rate_variance_rad2ps3", c.yaw_rate_variance_rad2ps3);
+  b.number("odometry.ukf_alpha", c.ukf_alpha);
+  b.number("odometry.ukf_beta", c.ukf_beta);
+  b.number("odometry.ukf_kappa", c.ukf_kappa);
+  b.number("odometry.wheel_velocity_variance_m2ps2", c.wheel_velocity_variance_m2ps2);
+  b.number("odometry.wheel_yaw_rate_variance_rad2ps2", c.wheel_yaw_rate_variance_rad2ps2);
+  b.number("odometry.wheel_lateral_velocity_variance_m2ps2",
+           c.wheel_lateral_velocity_variance_m2ps2);
+  b.number("odometry.imu_yaw_rate_variance_rad2ps2", c.imu_yaw_rate_variance_rad2ps2);
+  b.number("odometry.imu_smoothing", c.imu_smoothing);
+  b.boolean("odometry.gyro_bias_enabled", c.gyro_bias_enabled);
+  b.number("odometry.gyro_bias_initial_variance_rad2ps2", c.gyro_bias_initial_variance_rad2ps2);
+  b.number("odometry.gyro_bias_random_walk_variance_rad2ps3",
+           c.gyro_bias_random_walk_variance_rad2ps3);
+  b.number("odometry.gate_probability", c.gate_probability);
+  b.number("odometry.gate_override_after_s", c.gate_override_after_s);
+  b.number("odometry.gate_agreement_radps", c.gate_agreement_radps);
+  b.number("odometry.gate_agreement_window_s", c.gate_agreement_window_s);
+  b.boolean("odometry.gate_wheels_without_imu", c.gate_wheels_without_imu);
+  b.number("odometry.max_time_step_s", c.max_time_step_s);
+  b.number("odometry.initial_position_variance_m2", c.initial_position_variance_m2);
+  b.number("odometry.initial_yaw_variance_rad2", c.initial_yaw_variance_rad2);
+  b.number("odometry.initial_velocity_variance_m2ps2", c.initial_velocity_variance_m2ps2);
+  b.number("odometry.initial_yaw_rate_variance_rad2ps2", c.initial_yaw_rate_variance_rad2ps2);
+  b.number("odometry.wheel_radius_m", settings.wheel_radius_m);
+  b.custom("odometry.left_wheel_joint", [&](const YAML::Node& n, const std::string& k) {
+    settings.left_wheel_joint = scalar<std::string>(n, k, origin, "a joint name");
+  });
+  b.custom("odometry.right_wheel_joint", [&](const YAML::Node& n, const std::string& k) {
+    settings.right_wheel_joint = scalar<std::string>(n, k, origin, "a joint name");
+  });
+  b.custom("odometry.imu_yaw_axis", [&](const YAML::Node& n, const std::string& k) {
+    const auto axis = scalar<std::string>(n, k, origin, "an axis");
+    const std::map<std::string, std::pair<int, double>> axes{{"x", {0, 1.0}}, {"-x", {0, -1.0}},
+                                                             {"y", {1, 1.0}}, {"-y", {1, -1.0}},
+                                                             {"z", {2, 1.0}}, {"-z", {2, -1.0}}};
+    const auto it = axes.find(axis);
+    if (it == axes.end())
+      fail(origin, k + " must be one of x, -x, y, -y, z, -z, got '" + axis + "'");
+    settings.imu_yaw_axis = it->second.first;
+    settings.imu_yaw_sign = it->second.second;
+  });
+  b.section("odometry");
+  b.apply(root["odometry"], "odometry");
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(origin, e.what());
+  }
+  if (!(settings.wheel_radius_m >= 0.0 && std::isfinite(settings.wheel_radius_m))) {
+    fail(origin, "odometry.wheel_radius_m must be a finite number >= 0, got " +
+                     std::to_string(settings.wheel_radius_m));
+  }
+  return settings;
+}
+
+OdometrySettings load_odometry_settings(const std::string& path) {
+  return parse_odometry_settings(read_text(path), path);
 }
 
 }  // namespace dispel::io

@@ -791,7 +791,7 @@ TEST(DynamicFilterDefaults, SomeoneWalkingOutOfTheDarkIntoSpaceSeenEmptyIsRemove
   s.movers = {walker({3.0, -7.0}, {0.0, 1.0})};
   DynamicFilterConfig with = default_config();
   DynamicFilterConfig without = with;
-  without.free_space.no_return_free_range_m = 0.0;
+  without.free_space.no_return_is_free = false;
   DynamicFilter a{with}, b{without};
   const auto st_with = run(s, a, 160);
   const auto st_without = run(s, b, 160);

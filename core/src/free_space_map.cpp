@@ -30,8 +30,8 @@ void FreeSpaceConfig::validate() const {
     bad("long_occupied_scans", long_occupied_scans, "in [1, 10000]");
   }
   if (!(memory_s > 0.0)) bad("memory_s", memory_s, "> 0");
-  if (!(no_return_free_range_m >= 0.0 && std::isfinite(no_return_free_range_m))) {
-    bad("no_return_free_range_m", no_return_free_range_m, "finite and >= 0");
+  if (!(free_range_m > 0.0 && std::isfinite(free_range_m))) {
+    bad("free_range_m", free_range_m, "finite and > 0");
   }
   if (neighbourhood_cells < 0 || neighbourhood_cells > 10) {
     bad("neighbourhood_cells", neighbourhood_cells, "in [0, 10]");
@@ -96,6 +96,9 @@ int FreeSpaceMap::hit_balance(const Eigen::Vector2d& point_m) const {
   return index_of(point_m, i) ? cells_[static_cast<std::size_t>(i)].balance : 0;
 }
 
+// Every kCoarsestStride-th beam is traced from the scanner on; see add_scan().
+constexpr int kCoarsestStride = 16;
+
 void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
   const Eigen::Vector2d origin = sensor_pose.translation();
   if (!placed_) recenter(origin);
@@ -109,7 +112,9 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
   stamp_s_ = scan.stamp_s;
   const double c = config_.cell_size_m;
   const double no_return_reach =
-      std::min(config_.no_return_free_range_m, static_cast<double>(scan.range_max_m));
+      config_.no_return_is_free
+          ? std::min(config_.free_range_m, static_cast<double>(scan.range_max_m))
+          : 0.0;
   const auto direction = [&](std::size_t b) {
     const double bearing = sensor_pose.yaw_rad + scan.bearing_rad(b);
     return Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
@@ -130,15 +135,24 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
   for (std::size_t b = 0; b < scan.size(); ++b) {
     double free_until = 0.0;
     if (scan.is_valid(b)) {
-      free_until = scan.ranges_m[b] - config_.margin_m;
+      free_until = std::min(scan.ranges_m[b] - config_.margin_m, config_.free_range_m);
     } else if (std::isinf(scan.ranges_m[b]) && scan.ranges_m[b] > 0.0) {
       free_until = no_return_reach;
     }
-    if (!(free_until > 0.0)) continue;
-    // Every cell the beam crosses up to free_until, each once (Amanatides and Woo's traversal,
-    // in cell units).
+    // Near the scanner neighbouring beams cross the same cells: a beam is traced only from where
+    // the beams of the next coarser level (every 2k-th, for a beam that is a multiple of k but
+    // not of 2k) are more than half a cell apart.
+    int level = kCoarsestStride;
+    while (level > 1 && b % static_cast<std::size_t>(level) != 0) level /= 2;
+    const double start = level == kCoarsestStride
+                             ? 0.0
+                             : 0.5 * c / (2.0 * level * std::abs(scan.angle_increment_rad));
+    if (!(free_until > start)) continue;
+    // Every cell the beam crosses from start to free_until, each once (Amanatides and Woo's
+    // traversal, in cell units).
     const Eigen::Vector2d dir = direction(b);
-    const double fx = (origin.x() - origin_.x()) / c, fy = (origin.y() - origin_.y()) / c;
+    const Eigen::Vector2d from = origin + start * dir;
+    const double fx = (from.x() - origin_.x()) / c, fy = (from.y() - origin_.y()) / c;
     const double cx = std::floor(fx), cy = std::floor(fy);
     auto ix = static_cast<std::int64_t>(cx);
     auto iy = static_cast<std::int64_t>(cy);
@@ -148,7 +162,7 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     const double delta_y = dir.y() != 0.0 ? std::abs(1.0 / dir.y()) : inf;
     double next_x = dir.x() != 0.0 ? (step_x > 0 ? cx + 1.0 - fx : fx - cx) * delta_x : inf;
     double next_y = dir.y() != 0.0 ? (step_y > 0 ? cy + 1.0 - fy : fy - cy) * delta_y : inf;
-    const double length = free_until / c;
+    const double length = (free_until - start) / c;
     double t = 0.0;
     while (t < length && ix >= 0 && iy >= 0 && ix < cells_per_side_ && iy < cells_per_side_) {
       Cell& cell = cells_[static_cast<std::size_t>(iy * cells_per_side_ + ix)];

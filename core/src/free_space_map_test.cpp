@@ -48,7 +48,7 @@ TEST(FreeSpaceMap, SpaceSeenThroughIsFreeButNotTheSurfaceOrBeyondIt) {
 
 TEST(FreeSpaceMap, BeamsWithoutReturnSeeThroughUpToTheirReach) {
   FreeSpaceConfig c;
-  c.no_return_free_range_m = 6.0;
+  c.free_range_m = 6.0;
   FreeSpaceMap map(c);
   LaserScan nothing = ring(std::numeric_limits<float>::infinity());
   for (int k = 0; k < 3; ++k) map.add_scan(nothing, Pose2{});
@@ -60,12 +60,12 @@ TEST(FreeSpaceMap, BeamsWithoutReturnSeeThroughUpToTheirReach) {
   for (int k = 0; k < 3; ++k) capped.add_scan(nothing, Pose2{});
   EXPECT_TRUE(capped.known_free({3.0, 0.0}));
   EXPECT_FALSE(capped.known_free({5.0, 0.0}));
-  // Invalid measurements (NaN) say nothing; with the reach 0, neither does "no return".
+  // Invalid measurements (NaN) say nothing; nor does "no return" when told so.
   FreeSpaceMap unknown(c);
   LaserScan masked = ring(std::numeric_limits<float>::quiet_NaN());
   for (int k = 0; k < 3; ++k) unknown.add_scan(masked, Pose2{});
   EXPECT_FALSE(unknown.known_free({1.0, 0.0}));
-  c.no_return_free_range_m = 0.0;
+  c.no_return_is_free = false;
   FreeSpaceMap off(c);
   for (int k = 0; k < 3; ++k) off.add_scan(ring(std::numeric_limits<float>::infinity()), Pose2{});
   EXPECT_FALSE(off.known_free({1.0, 0.0}));

@@ -177,7 +177,8 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
     b.number("free_space.margin_m", f.margin_m);
     b.integer("free_space.min_free_observations", f.min_free_observations);
     b.integer("free_space.max_recent_hits", f.max_recent_hits);
-    b.number("free_space.no_return_free_range_m", f.no_return_free_range_m);
+    b.number("free_space.free_range_m", f.free_range_m);
+    b.boolean("free_space.no_return_is_free", f.no_return_is_free);
     b.number("free_space.memory_s", f.memory_s);
     b.boolean("free_space.keep_long_occupied", f.keep_long_occupied);
     b.integer("free_space.long_occupied_scans", f.long_occupied_scans);

@@ -58,7 +58,8 @@ void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d
   EXPECT_EQ(loaded.free_space.extent_m, d.free_space.extent_m);
   EXPECT_EQ(loaded.free_space.margin_m, d.free_space.margin_m);
   EXPECT_EQ(loaded.free_space.min_free_observations, d.free_space.min_free_observations);
-  EXPECT_EQ(loaded.free_space.no_return_free_range_m, d.free_space.no_return_free_range_m);
+  EXPECT_EQ(loaded.free_space.free_range_m, d.free_space.free_range_m);
+  EXPECT_EQ(loaded.free_space.no_return_is_free, d.free_space.no_return_is_free);
   EXPECT_EQ(loaded.free_space.max_recent_hits, d.free_space.max_recent_hits);
   EXPECT_EQ(loaded.free_space.memory_s, d.free_space.memory_s);
   EXPECT_EQ(loaded.free_space.keep_long_occupied, d.free_space.keep_long_occupied);

@@ -18,20 +18,16 @@
 
 #include "dispel/io/ros_convert.hpp"
 #include "dispel/sim/raycast.hpp"
+#include "test_files.hpp"
 
 namespace dispel::io {
 namespace {
 
 constexpr double kDeg = kPi / 180.0;
 
-std::string source_path(const std::string& relative) {
-  return std::string(DISPEL_SOURCE_DIR) + "/" + relative;
-}
-std::string temp_path(const std::string& name) { return ::testing::TempDir() + "/" + name; }
-bool exists(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0;
-}
+using test::exists;
+using test::source_path;
+using test::temp_path;
 
 struct BagContents {
   std::map<std::string, std::vector<sensor_msgs::LaserScan>> scans;

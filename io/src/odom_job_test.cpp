@@ -16,18 +16,14 @@
 #include "dispel/io/filter_job.hpp"
 #include "dispel/io/scenario_yaml.hpp"
 #include "dispel/io/sim_bag.hpp"
+#include "test_files.hpp"
 
 namespace dispel::io {
 namespace {
 
-std::string source_path(const std::string& relative) {
-  return std::string(DISPEL_SOURCE_DIR) + "/" + relative;
-}
-std::string temp_path(const std::string& name) { return ::testing::TempDir() + "/" + name; }
-bool exists(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0;
-}
+using test::exists;
+using test::source_path;
+using test::temp_path;
 void write_file(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
 
 eval::TrajectoryErrors errors(const std::string& truth, const std::string& estimate,

@@ -39,10 +39,13 @@ struct FreeSpaceConfig {
   /// Free space seen longer ago than this is forgotten: odometry drifts, and space seen free
   /// minutes ago in a frame that has since drifted would put a pillar "in free space".
   double memory_s = 5.0;
-  /// A beam with no return (+inf, REP 117) passed freely this far (capped at the scan's maximum
-  /// range): in a hall whose walls are out of range, most of what the scanner sees through gives
-  /// no return. 0: only beams with a return give free space. NaN beams never do.
-  double no_return_free_range_m = 10.0;
+  /// Free space is traced along each beam up to this far from the scanner (and up to margin_m
+  /// before its return). The cost grows with it; 20 m covers what a forklift is tracked at.
+  double free_range_m = 20.0;
+  /// A beam with no return (+inf, REP 117) passed freely (up to free_range_m, capped at the
+  /// scan's maximum range): in a hall whose walls are out of range, most of what the scanner sees
+  /// through gives no return. NaN beams never do.
+  bool no_return_is_free = true;
   /// A point is in free space when every cell within this many cells of it is known free (room
   /// for odometry errors: a slip that shifts the map must not put a pillar in "free" space).
   int neighbourhood_cells = 2;
@@ -69,7 +72,7 @@ class FreeSpaceMap {
   int hit_balance(const Eigen::Vector2d& point_m) const;
 
   /// Adds a scan taken from @p sensor_pose: cells along each valid beam, up to margin_m before its
-  /// return, are seen free, as are cells along a beam with no return up to no_return_free_range_m;
+  /// return, are seen free, as are cells along a beam with no return, all up to free_range_m;
   /// then every return's cell is hit (a hit in the same scan wins over a beam passing by).
   void add_scan(const LaserScan& scan, const Pose2& sensor_pose);
 

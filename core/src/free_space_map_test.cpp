@@ -112,6 +112,34 @@ TEST(FreeSpaceMap, ABeamFreesEveryCellItCrossesAndNoOther) {
   EXPECT_FALSE(map.known_free(pose.translation() + 4.9 * dir));
 }
 
+TEST(FreeSpaceMap, ADenseScanLeavesNoHolesWhereItTracesSparsely) {
+  // The thesis's scanner: 1617 beams over 275 degrees. Near the scanner only every 16th beam is
+  // traced (the others cross the same cells); every cell inside the fan must still be seen.
+  FreeSpaceConfig c;
+  c.neighbourhood_cells = 0;
+  c.min_free_observations = 1;
+  FreeSpaceMap map(c);
+  LaserScan s;
+  s.angle_min_rad = -137.5 * kPi / 180.0;
+  s.angle_increment_rad = 275.0 * kPi / 180.0 / 1616.0;
+  s.range_min_m = 0.05F;
+  s.range_max_m = 40.0F;
+  s.ranges_m.assign(1617, 8.0F);
+  const Pose2 pose{1.234, -0.567, 0.3};
+  map.add_scan(s, pose);
+  int checked = 0;
+  for (double r = 0.2; r < 7.5; r += 0.05) {
+    for (double a = -130.0; a <= 130.0; a += 0.25) {
+      const double bearing = pose.yaw_rad + a * kPi / 180.0;
+      const Eigen::Vector2d p =
+          pose.translation() + r * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+      ASSERT_TRUE(map.known_free(p)) << "r " << r << " a " << a;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 100000);
+}
+
 TEST(FreeSpaceMap, NeedsEnoughObservationsAndFollowsTheSensorPose) {
   FreeSpaceConfig c;
   c.min_free_observations = 2;

@@ -97,7 +97,7 @@ int FreeSpaceMap::hit_balance(const Eigen::Vector2d& point_m) const {
 }
 
 // Every kCoarsestStride-th beam is traced from the scanner on; see add_scan().
-constexpr int kCoarsestStride = 16;
+constexpr std::size_t kCoarsestStride = 16;
 
 void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
   const Eigen::Vector2d origin = sensor_pose.translation();
@@ -132,21 +132,30 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     cell.occupied =
         static_cast<std::int16_t>(std::min(cell.occupied + 1, 2 * config_.long_occupied_scans));
   }
+  // How far each beam saw free space: to margin_m before its return, or (no return) its reach.
+  free_until_.assign(scan.size(), 0.0);
   for (std::size_t b = 0; b < scan.size(); ++b) {
-    double free_until = 0.0;
     if (scan.is_valid(b)) {
-      free_until = std::min(scan.ranges_m[b] - config_.margin_m, config_.free_range_m);
+      free_until_[b] = std::min(scan.ranges_m[b] - config_.margin_m, config_.free_range_m);
     } else if (std::isinf(scan.ranges_m[b]) && scan.ranges_m[b] > 0.0) {
-      free_until = no_return_reach;
+      free_until_[b] = no_return_reach;
     }
-    // Near the scanner neighbouring beams cross the same cells: a beam is traced only from where
-    // the beams of the next coarser level (every 2k-th, for a beam that is a multiple of k but
-    // not of 2k) are more than half a cell apart.
-    int level = kCoarsestStride;
-    while (level > 1 && b % static_cast<std::size_t>(level) != 0) level /= 2;
-    const double start = level == kCoarsestStride
-                             ? 0.0
-                             : 0.5 * c / (2.0 * level * std::abs(scan.angle_increment_rad));
+  }
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    const double free_until = free_until_[b];
+    if (!(free_until > 0.0)) continue;
+    // Near the scanner neighbouring beams cross the same cells. A beam that is a multiple of k
+    // but not of 2k is traced only from where its two neighbours of the coarser level (b - k and
+    // b + k) are more than a cell apart, or from where one of them ends if that is nearer (the
+    // edge of an occluder). Lines at most a cell apart cross every cell between them (a square's
+    // width across any direction is at least its side).
+    std::size_t level = kCoarsestStride;
+    while (level > 1 && b % level != 0) level /= 2;
+    double start = 0.0;
+    if (level < kCoarsestStride && b >= level && b + level < scan.size()) {
+      start = std::min({c / (2.0 * static_cast<double>(level) * std::abs(scan.angle_increment_rad)),
+                        free_until_[b - level], free_until_[b + level]});
+    }
     if (!(free_until > start)) continue;
     // Every cell the beam crosses from start to free_until, each once (Amanatides and Woo's
     // traversal, in cell units).

@@ -125,19 +125,37 @@ TEST(FreeSpaceMap, ADenseScanLeavesNoHolesWhereItTracesSparsely) {
   s.range_min_m = 0.05F;
   s.range_max_m = 40.0F;
   s.ranges_m.assign(1617, 8.0F);
+  // Something at 1 m casts a shadow over beams 805 to 823: beside it the space stays seen.
+  for (std::size_t b = 805; b <= 823; ++b) s.ranges_m[b] = 1.0F;
+  const double shadow_begin = s.bearing_rad(805), shadow_end = s.bearing_rad(823);
   const Pose2 pose{1.234, -0.567, 0.3};
   map.add_scan(s, pose);
-  int checked = 0;
+  int checked = 0, shadowed = 0;
   for (double r = 0.2; r < 7.5; r += 0.05) {
     for (double a = -130.0; a <= 130.0; a += 0.25) {
-      const double bearing = pose.yaw_rad + a * kPi / 180.0;
+      const double bearing = a * kPi / 180.0;
       const Eigen::Vector2d p =
-          pose.translation() + r * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+          pose.translation() +
+          r * Eigen::Vector2d(std::cos(pose.yaw_rad + bearing), std::sin(pose.yaw_rad + bearing));
+      const double margin = 0.15 / r;  // A cell and a half.
+      // Points just beside the shadow (half a beam beyond its last beam) must be seen.
+      const double edge = 0.5 * s.angle_increment_rad;
+      const bool near_occluder = std::abs(r - 1.0) < 0.4 && bearing > shadow_begin - 0.4 / r &&
+                                 bearing < shadow_end + 0.4 / r;  // Its margin_m and cells.
+      if (near_occluder) continue;
+      if (bearing > shadow_begin - edge && bearing < shadow_end + edge) {
+        if (r > 1.3 && bearing > shadow_begin + margin && bearing < shadow_end - margin) {
+          EXPECT_FALSE(map.known_free(p)) << "in the shadow: r " << r << " a " << a;
+          ++shadowed;
+        }
+        continue;
+      }
       ASSERT_TRUE(map.known_free(p)) << "r " << r << " a " << a;
       ++checked;
     }
   }
   EXPECT_GT(checked, 100000);
+  EXPECT_GT(shadowed, 50);
 }
 
 TEST(FreeSpaceMap, NeedsEnoughObservationsAndFollowsTheSensorPose) {

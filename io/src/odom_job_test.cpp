@@ -3,6 +3,9 @@
 #include "dispel/io/odom_job.hpp"
 
 #include <gtest/gtest.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/Imu.h>
+#include <sensor_msgs/JointState.h>
 #include <sys/stat.h>
 
 #include <cmath>
@@ -75,6 +78,43 @@ TEST(OdomJob, CsvWheelsAndGyroOfAKnownArcGiveItsPose) {
   std::string header;
   std::getline(in, header);
   EXPECT_EQ(header, "t,x,y,yaw,v,omega,var_x,var_y,var_yaw,var_v,var_omega");
+}
+
+TEST(OdomJob, JointStatesInRadiansPerSecondAreFoundByNameAndScaledByTheWheelRadius) {
+  // A robot whose driver publishes the wheel joints right first, in rad/s, with a header stamp,
+  // and an IMU whose yaw rate is on its -y axis.
+  const std::string bag_path = temp_path("joint_states.bag");
+  {
+    rosbag::Bag bag(bag_path, rosbag::bagmode::Write);
+    for (int k = 0; k <= 100; ++k) {
+      const ros::Time t(10.0 + 0.02 * k);
+      sensor_msgs::JointState js;
+      js.header.stamp = t;
+      js.name = {"front_right_wheel_joint", "front_left_wheel_joint"};
+      js.velocity = {6.0, 4.0};  // rad/s; wheels of 0.1 m: right 0.6 m/s, left 0.4 m/s.
+      bag.write("/joint_states", t, js);
+      sensor_msgs::Imu imu;
+      imu.header.stamp = t;
+      imu.angular_velocity.y = -0.4;  // (0.6 - 0.4) / 0.5 = 0.4 rad/s, on -y.
+      bag.write("/imu/data", t, imu);
+    }
+  }
+  OdomJobOptions o;
+  o.input = bag_path;
+  o.output = temp_path("joint_states.csv");
+  o.config_path = temp_path("joint_states.yaml");
+  write_file(*o.config_path,
+             "odometry: {wheel_radius_m: 0.1, track_width_m: 0.5, imu_yaw_axis: -y}\n");
+  const OdomJobStats s = run(o, "ct");
+  EXPECT_EQ(s.wheel_source, "/joint_states");
+  EXPECT_EQ(s.imu_source, "/imu/data");
+  EXPECT_EQ(s.counters.count(OdometryEvent::kGated), 0);
+  const OdometryEstimate& e = s.final_estimate;
+  EXPECT_NEAR(e.v_mps, 0.5, 1e-3);
+  EXPECT_NEAR(e.omega_radps, 0.4, 1e-3);
+  EXPECT_NEAR(e.yaw_rad, 0.4 * 2.0, 0.01);
+  std::remove(bag_path.c_str());
+  std::remove(o.output.c_str());
 }
 
 // --- The simulator ----------------------------------------------------------------------------

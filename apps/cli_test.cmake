@@ -200,3 +200,32 @@ expect_error_no_output("which topic holds the wheel speeds" ${WORK_DIR}/x.csv
 expect_error_no_output("cannot open the file" ${WORK_DIR}/x.csv
                        eval-trajectory --truth ${WORK_DIR}/missing.csv --estimate ${traj})
 message(STATUS "dispel odom and eval-trajectory contract holds")
+
+# dispel render: a map of the shipped recording (a stationary scanner), and a bad view.
+set(picture ${WORK_DIR}/render.png)
+file(REMOVE ${picture})
+run_dispel(rc so se render ${BAG} -o ${picture} --static-sensor --size 800x600)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${picture} OR NOT so MATCHES "1265 scans")
+  message(FATAL_ERROR "dispel render failed (${rc}): ${so}${se}")
+endif()
+file(READ ${picture} png_header LIMIT 8 HEX)
+if(NOT png_header STREQUAL "89504e470d0a1a0a")
+  message(FATAL_ERROR "dispel render wrote no PNG: ${png_header}")
+endif()
+file(REMOVE ${picture})
+expect_error_no_output("unknown view 'top'" ${picture}
+                       render ${BAG} -o ${picture} --static-sensor --view top)
+expect_error_no_output("scan index 5000 out of range" ${picture}
+                       render ${BAG} -o ${picture} --static-sensor --view scan --scan-index 5000)
+expect_error_no_output("no nav_msgs/Odometry topic /odom" ${picture} render ${BAG} -o ${picture})
+# dispel eval --plot: the evaluation of the short simulated run above as a picture.
+file(REMOVE ${WORK_DIR}/eval.png)
+run_dispel(rc so se eval --truth ${sim} --result ${WORK_DIR}/sim_filtered.bag --plot
+           ${WORK_DIR}/eval.png)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK_DIR}/eval.png OR NOT so MATCHES "preservation rate")
+  message(FATAL_ERROR "dispel eval --plot failed (${rc}): ${so}${se}")
+endif()
+expect_error_no_output("unknown picture format" ${WORK_DIR}/eval.gif
+                       eval --truth ${sim} --result ${WORK_DIR}/sim_filtered.bag
+                       --plot ${WORK_DIR}/eval.gif)
+message(STATUS "dispel render contract holds")

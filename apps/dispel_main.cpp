@@ -7,6 +7,7 @@
 #ifdef DISPEL_HAVE_IO
 #include "filter_command.hpp"
 #include "odom_commands.hpp"
+#include "render_command.hpp"
 #include "sim_commands.hpp"
 #endif
 
@@ -76,6 +77,42 @@ int main(int argc, char** argv) {
   eval_cmd->add_option("--scan-topic", evaluation.scan_topic, "LaserScan topic")
       ->capture_default_str();
   eval_cmd->add_flag("--json", evaluation.json, "Print JSON");
+  eval_cmd->add_option("--plot", evaluation.plot,
+                       "Also draw the latency histogram and the rates into FILE.png or .svg");
+
+  dispel::apps::RenderCommandOptions render;
+  std::string render_config;
+  double render_from = 0.0, render_to = 0.0;
+  CLI::App* render_cmd = app.add_subcommand(
+      "render", "Draw a recording (filtered or not) as a map of all scans or one scan's objects");
+  render_cmd->add_option("input", render.job.input, "IN.bag")->required();
+  render_cmd->add_option("-o,--output", render.job.output, "OUT.png or OUT.svg to write")
+      ->required();
+  render_cmd->add_option("--view", render.job.view, "map (all scans) or scan (one scan)")
+      ->capture_default_str();
+  render_cmd
+      ->add_option("--scan-index", render.job.scan_index,
+                   "Scan view: which scan, 0-based among the scan topic's messages")
+      ->capture_default_str();
+  CLI::Option* from_opt = render_cmd->add_option(
+      "--from", render_from, "Map view: first scan drawn, seconds from the recording's start");
+  CLI::Option* to_opt = render_cmd->add_option(
+      "--to", render_to, "Map view: last scan drawn, seconds from the recording's start");
+  render_cmd
+      ->add_option("--frame", render.job.frame,
+                   "odom (odometry + laser mount) or truth (/ground_truth of dispel sim)")
+      ->capture_default_str();
+  render_cmd->add_option("--scan-topic", render.job.scan_topic, "LaserScan topic")
+      ->capture_default_str();
+  render_cmd->add_option("--odom-topic", render.job.odom_topic, "Odometry topic")
+      ->capture_default_str();
+  render_cmd->add_flag("--static-sensor", render.job.static_sensor,
+                       "The sensor does not move (no odometry needed)");
+  render_cmd->add_option("--config", render_config,
+                         "Scan view: YAML configuration of the segmentation and filter");
+  render_cmd->add_flag("--scale-to-scanner", render.job.scale_to_scanner,
+                       "Scan view: as dispel filter --scale-to-scanner");
+  render_cmd->add_option("--size", render.size, "Picture size WIDTHxHEIGHT (default 1600x1200)");
 
   dispel::apps::OdomCommandOptions odom;
   std::string odom_config, odom_model;
@@ -132,6 +169,12 @@ int main(int argc, char** argv) {
       return dispel::apps::run_odom(odom);
     }
     if (*eval_trajectory_cmd) return dispel::apps::run_eval_trajectory(eval_trajectory);
+    if (*render_cmd) {
+      if (!render_config.empty()) render.job.config_path = render_config;
+      if (from_opt->count() > 0) render.job.from_s = render_from;
+      if (to_opt->count() > 0) render.job.to_s = render_to;
+      return dispel::apps::run_render(render);
+    }
 #endif
   } catch (const std::exception& e) {
     std::cerr << "dispel: " << e.what() << "\n";

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "dispel/io/eval_job.hpp"
+#include "dispel/io/render.hpp"
 #include "dispel/io/scenario_yaml.hpp"
 #include "dispel/io/sim_bag.hpp"
 
@@ -48,6 +49,16 @@ int run_eval(const EvalOptions& o) {
   } catch (const std::exception& e) {
     std::cerr << "dispel eval: " << e.what() << "\n";
     return 1;
+  }
+  if (!o.plot.empty()) {
+    try {
+      const auto name = [](const std::string& p) { return p.substr(p.find_last_of('/') + 1); };
+      io::plot_evaluation(r, "dispel eval: " + name(o.result) + " against " + name(o.truth),
+                          o.plot);
+    } catch (const std::exception& e) {
+      std::cerr << "dispel eval: " << e.what() << "\n";
+      return 1;
+    }
   }
   if (o.json) {
     nlohmann::ordered_json j;

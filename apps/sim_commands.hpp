@@ -19,6 +19,7 @@ struct EvalOptions {
   std::string result;
   std::string scan_topic = "/scan";
   bool json = false;
+  std::string plot;  ///< Also draw the evaluation into this .png or .svg (empty: no picture).
 };
 int run_eval(const EvalOptions& options);
 

@@ -12,6 +12,7 @@ packages=(
   librosbag-storage-dev libsensor-msgs-dev libnav-msgs-dev libgeometry-msgs-dev
   libtf2-msgs-dev                      # ROS 1 bags (the real bag library, no ROS install needed)
   python3-rosbag                       # tests: bags we write must read in Python and rosbag info
+  libcairo2-dev libfontconfig-dev      # dispel render, eval --plot: PNG and SVG pictures (Cairo)
 )
 
 missing=()

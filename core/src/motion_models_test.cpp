@@ -52,7 +52,7 @@ Eigen::Vector3d ct_reference(double v, double psi, double omega, double dt) {
           static_cast<double>(chord * std::sin(heading)), static_cast<double>(lpsi + lw * lt)};
 }
 
-TEST(odom_MotionModels, CtExactMatchesRungeKuttaIntegrationOfTheContinuousModel) {
+TEST(OdomMotionModels, CtExactMatchesRungeKuttaIntegrationOfTheContinuousModel) {
   const std::vector<double> speeds{0.0, 0.3, 2.0, -1.0};
   const std::vector<double> rates{0.0, 1e-12, -1e-12, 1e-6, 0.5, -0.5, 3.0, -2.7};
   const std::vector<double> steps{0.01, 0.1, 1.0, 2.5};
@@ -77,7 +77,7 @@ TEST(odom_MotionModels, CtExactMatchesRungeKuttaIntegrationOfTheContinuousModel)
   }
 }
 
-TEST(odom_MotionModels, CtExactIsContinuousAcrossZeroYawRateToMachinePrecision) {
+TEST(OdomMotionModels, CtExactIsContinuousAcrossZeroYawRateToMachinePrecision) {
   const double v = 1.3;
   const double psi = 0.7;
   const double dt = 0.1;
@@ -95,7 +95,7 @@ TEST(odom_MotionModels, CtExactIsContinuousAcrossZeroYawRateToMachinePrecision) 
   EXPECT_NEAR(y_plus - y_zero, v * dt * dt * 1e-9 / 2.0, 1e-24);
 }
 
-TEST(odom_MotionModels, SincIsSmoothAcrossItsTaylorThreshold) {
+TEST(OdomMotionModels, SincIsSmoothAcrossItsTaylorThreshold) {
   for (double a : {0.01, -0.01}) {
     const double below = sinc(std::nextafter(a, 0.0));
     const double above = sinc(a);
@@ -106,7 +106,7 @@ TEST(odom_MotionModels, SincIsSmoothAcrossItsTaylorThreshold) {
   EXPECT_NEAR(sinc(1e-3), std::sin(1e-3) / 1e-3, 2e-16);
 }
 
-TEST(odom_MotionModels, CtEulerErrorShrinksWithTheSquareOfTheStep) {
+TEST(OdomMotionModels, CtEulerErrorShrinksWithTheSquareOfTheStep) {
   const CtState<double> s = ct(1.0, 2.0, 1.5, 0.4, 0.8);
   auto error = [&](double dt) {
     return (ct_predict_euler(s, dt) - ct_predict(s, dt)).head<2>().norm();
@@ -124,7 +124,7 @@ TEST(odom_MotionModels, CtEulerErrorShrinksWithTheSquareOfTheStep) {
   EXPECT_LT((ct_predict_euler(straight, 0.3) - ct_predict(straight, 0.3)).norm(), 1e-15);
 }
 
-TEST(odom_MotionModels, OmniMovesInTheBodyFrameRotatedByYaw) {
+TEST(OdomMotionModels, OmniMovesInTheBodyFrameRotatedByYaw) {
   using O = OmniIndex;
   OmniState<double> s;
   s << 3.0, 4.0, kPi / 2.0, 1.0, 0.5, 0.2;  // Facing +y, driving forward and to the left.
@@ -142,7 +142,7 @@ TEST(odom_MotionModels, OmniMovesInTheBodyFrameRotatedByYaw) {
   EXPECT_NEAR(o(O::kY), e(I::kY), 1e-15);
 }
 
-TEST(odom_MotionModels, ProcessNoiseIsTheThesisDiagonalScaledByTheStep) {
+TEST(OdomMotionModels, ProcessNoiseIsTheThesisDiagonalScaledByTheStep) {
   const Eigen::Matrix<double, 5, 5> q = ct_process_noise(0.05, 0.01, 0.049);
   Eigen::Matrix<double, 5, 1> diag;
   diag << 0.0, 0.0, 0.05 * 0.01, 0.0, 0.05 * 0.049;
@@ -154,7 +154,7 @@ TEST(odom_MotionModels, ProcessNoiseIsTheThesisDiagonalScaledByTheStep) {
   EXPECT_EQ(qo.diagonal(), diag_o);
 }
 
-TEST(odom_MotionModels, WheelMeasurementsOfADifferentialDrive) {
+TEST(OdomMotionModels, WheelMeasurementsOfADifferentialDrive) {
   EXPECT_DOUBLE_EQ(wheel_linear_velocity(0.4, 0.6), 0.5);
   EXPECT_DOUBLE_EQ(wheel_yaw_rate(0.4, 0.6, 0.5), 0.4);  // Right wheel faster: turning left.
   EXPECT_DOUBLE_EQ(wheel_yaw_rate(-0.25, 0.25, 0.5), 1.0);

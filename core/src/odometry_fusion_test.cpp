@@ -109,9 +109,9 @@ OdometryConfig simulation_config(double alpha, double wheel_noise_mps, double gy
   return c;
 }
 
-class odom_FusionConsistency : public ::testing::TestWithParam<double> {};
+class OdomFusionConsistency : public ::testing::TestWithParam<double> {};
 
-TEST_P(odom_FusionConsistency, AverageNeesOfMonteCarloRunsIsInsideTheChiSquareBand) {
+TEST_P(OdomFusionConsistency, AverageNeesOfMonteCarloRunsIsInsideTheChiSquareBand) {
   const double wheel_noise = 0.01;
   const double gyro_noise = 0.005;
   const MonteCarloResult r = monte_carlo_nees(
@@ -121,7 +121,7 @@ TEST_P(odom_FusionConsistency, AverageNeesOfMonteCarloRunsIsInsideTheChiSquareBa
   EXPECT_LT(r.anees, r.band_high) << "band [" << r.band_low << ", " << r.band_high << "]";
 }
 
-INSTANTIATE_TEST_SUITE_P(Alphas, odom_FusionConsistency, ::testing::Values(0.001, 0.1, 0.5, 1.0));
+INSTANTIATE_TEST_SUITE_P(Alphas, OdomFusionConsistency, ::testing::Values(0.001, 0.1, 0.5, 1.0));
 
 // ---------------------------------------------------------------------------------------------
 // Long runs. kLongRunSteps measurements (half wheels, half IMU, 100 Hz): a lawnmower pattern of
@@ -149,7 +149,7 @@ std::pair<double, double> lawnmower(double t) {
   return {0.5 - 0.3 * turning, side * turning * kPi / 10.0};
 }
 
-TEST(odom_FusionLongRun, CovarianceStaysSymmetricPositiveDefiniteOverAMillionSteps) {
+TEST(OdomFusionLongRun, CovarianceStaysSymmetricPositiveDefiniteOverAMillionSteps) {
   for (OdometryModel model : {OdometryModel::kCt, OdometryModel::kOmni}) {
     OdometryConfig config;
     config.model = model;
@@ -201,7 +201,7 @@ std::pair<OdometryEstimate, OdometryEstimate> stand_still(bool bias_enabled, dou
   return {half, filter.estimate()};
 }
 
-TEST(odom_FusionGyroBias, StandingStillTheBiasConvergesAndTheYawDoesNotDrift) {
+TEST(OdomFusionGyroBias, StandingStillTheBiasConvergesAndTheYawDoesNotDrift) {
   const auto [half, end] = stand_still(true, 120.0);
   EXPECT_NEAR(end.gyro_bias_radps, 0.02, 1e-3);
   EXPECT_LT(std::sqrt(end.gyro_bias_variance_rad2ps2), 2e-3);
@@ -237,7 +237,7 @@ OdometryFusion drive_with_slip(double gate_probability) {
   return filter;
 }
 
-TEST(odom_FusionGate, WheelSlipIsGatedAndCountedAndThePoseStaysAccurate) {
+TEST(OdomFusionGate, WheelSlipIsGatedAndCountedAndThePoseStaysAccurate) {
   const OdometryFusion gated = drive_with_slip(0.999);
   const OdometryFusion ungated = drive_with_slip(0.0);
   auto error = [](const OdometryFusion& f) {
@@ -268,7 +268,7 @@ OdometryFusion turn_on_the_spot(const OdometryConfig& config, bool with_imu, dou
   return filter;
 }
 
-TEST(odom_FusionGate, ATurnBothSensorsSeeIsFusedAtOnce) {
+TEST(OdomFusionGate, ATurnBothSensorsSeeIsFusedAtOnce) {
   // The turn starts faster than the yaw-rate random walk expects, so the gate refuses it; the
   // wheels and the gyro agree, so it is a manoeuvre, not a slip.
   // Stopped in the middle of the turn (1.5 s into it).
@@ -286,7 +286,7 @@ TEST(odom_FusionGate, ATurnBothSensorsSeeIsFusedAtOnce) {
   EXPECT_GT(std::abs(gate_only.estimate().yaw_rad - true_yaw), 0.15);
 }
 
-TEST(odom_FusionGate, WithoutAGyroTheWheelsAreNotGated) {
+TEST(OdomFusionGate, WithoutAGyroTheWheelsAreNotGated) {
   // Nothing but the motion model could call the turn a slip: the wheels are taken as they are
   // (and the filter follows dead reckoning), unless gate_wheels_without_imu asks otherwise.
   OdometryConfig config;
@@ -298,7 +298,7 @@ TEST(odom_FusionGate, WithoutAGyroTheWheelsAreNotGated) {
   EXPECT_GT(wheels(gated, OdometryEvent::kGated), 20);
 }
 
-TEST(odom_FusionGate, APersistentChangeIsAcceptedAfterTheOverrideTime) {
+TEST(OdomFusionGate, APersistentChangeIsAcceptedAfterTheOverrideTime) {
   // The robot is pushed: the wheels jump from 0.5 to 1.5 m/s and stay there. The gate refuses
   // the jump at first, but cannot lock the filter out.
   OdometryConfig config;
@@ -317,7 +317,7 @@ TEST(odom_FusionGate, APersistentChangeIsAcceptedAfterTheOverrideTime) {
 
 // ---------------------------------------------------------------------------------------------
 // Bad data never aborts: it is counted and leaves the state as it was.
-TEST(odom_FusionRejection, NonFiniteAndOutOfOrderInputsAreCountedAndChangeNothing) {
+TEST(OdomFusionRejection, NonFiniteAndOutOfOrderInputsAreCountedAndChangeNothing) {
   OdometryFusion filter{OdometryConfig{}};
   ASSERT_EQ(filter.add_wheels(1.0, 0.5, 0.5), OdometryEvent::kAccepted);
   ASSERT_EQ(filter.add_imu(1.01, 0.0), OdometryEvent::kAccepted);
@@ -345,7 +345,7 @@ TEST(odom_FusionRejection, NonFiniteAndOutOfOrderInputsAreCountedAndChangeNothin
   EXPECT_STREQ(odometry_event_name(OdometryEvent::kRejectedOutOfOrder), "rejected_out_of_order");
 }
 
-TEST(odom_FusionRejection, InvalidConfigurationThrowsNamingTheField) {
+TEST(OdomFusionRejection, InvalidConfigurationThrowsNamingTheField) {
   auto message = [](OdometryConfig c) -> std::string {
     try {
       OdometryFusion filter(c);
@@ -387,7 +387,7 @@ TEST(odom_FusionRejection, InvalidConfigurationThrowsNamingTheField) {
 
 // ---------------------------------------------------------------------------------------------
 // Models and helpers.
-TEST(odom_Fusion, NoiseFreeArcIsFollowedByEveryModelAndByDeadReckoning) {
+TEST(OdomFusion, NoiseFreeArcIsFollowedByEveryModelAndByDeadReckoning) {
   // 0.4 m/s on a circle of radius 2 m (omega 0.2 rad/s) for 10 s, starting at (1, 2, 0.3).
   const Pose2 start{1.0, 2.0, 0.3};
   const double v = 0.4;
@@ -428,7 +428,7 @@ TEST(odom_Fusion, NoiseFreeArcIsFollowedByEveryModelAndByDeadReckoning) {
   }
 }
 
-TEST(odom_Fusion, LongGapsAreSplitAndPredictLooksAheadWithoutChangingTheFilter) {
+TEST(OdomFusion, LongGapsAreSplitAndPredictLooksAheadWithoutChangingTheFilter) {
   OdometryFusion filter{OdometryConfig{}};
   filter.add_wheels(0.0, 0.5, 0.5);
   const OdometryEstimate ahead = filter.predict(1.0);
@@ -445,7 +445,7 @@ TEST(odom_Fusion, LongGapsAreSplitAndPredictLooksAheadWithoutChangingTheFilter) 
   EXPECT_EQ(filter.estimate().t_s, 1.0);
 }
 
-TEST(odom_Fusion, ImuSmoothingIsTheExponentialMovingAverage) {
+TEST(OdomFusion, ImuSmoothingIsTheExponentialMovingAverage) {
   OdometryConfig config;
   config.imu_smoothing = 0.5;
   config.gyro_bias_enabled = false;

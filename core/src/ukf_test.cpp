@@ -30,9 +30,9 @@ double relative_difference(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
 
 // A planar constant-velocity model (x, y, vx, vy) with position measurements, filtered by the
 // textbook Kalman filter and by the UKF: on a linear problem they must agree, whatever alpha.
-class odom_UkfLinear : public ::testing::TestWithParam<double> {};
+class OdomUkfLinear : public ::testing::TestWithParam<double> {};
 
-TEST_P(odom_UkfLinear, MatchesTheTextbookKalmanFilter) {
+TEST_P(OdomUkfLinear, MatchesTheTextbookKalmanFilter) {
   UnscentedKalmanFilter<4> ukf(with_alpha(GetParam()));
   Vec4 x(1.0, -2.0, 0.5, 0.1);
   Mat4 p = Mat4::Identity();
@@ -78,11 +78,11 @@ TEST_P(odom_UkfLinear, MatchesTheTextbookKalmanFilter) {
   EXPECT_EQ(ukf.cholesky_repairs(), 0);
 }
 
-INSTANTIATE_TEST_SUITE_P(Alphas, odom_UkfLinear, ::testing::Values(0.001, 0.1, 0.5, 1.0));
+INSTANTIATE_TEST_SUITE_P(Alphas, OdomUkfLinear, ::testing::Values(0.001, 0.1, 0.5, 1.0));
 
 // The covariance sums taken relative to the central sigma point equal the textbook weighted sum
 // sum_i Wc_i (y_i - mean)(y_i - mean)^T on a nonlinear model (where the mean term matters).
-TEST(odom_Ukf, PredictionEqualsTheTextbookSigmaPointSums) {
+TEST(OdomUkf, PredictionEqualsTheTextbookSigmaPointSums) {
   for (double alpha : {0.3, 1.0}) {
     UkfParameters params;
     params.alpha = alpha;
@@ -123,9 +123,9 @@ TEST(odom_Ukf, PredictionEqualsTheTextbookSigmaPointSums) {
 // A CT state heading almost exactly at +pi (sigma points on both sides of the +-pi cut) and far
 // from the origin, predicted and corrected with a yaw-rate and a compass measurement, gives the
 // same result as the same problem rotated and translated so that it sits at the origin heading 0.
-class odom_UkfAngles : public ::testing::TestWithParam<double> {};
+class OdomUkfAngles : public ::testing::TestWithParam<double> {};
 
-TEST_P(odom_UkfAngles, StateNearPiFarFromTheOriginMatchesTheSameProblemAtTheOrigin) {
+TEST_P(OdomUkfAngles, StateNearPiFarFromTheOriginMatchesTheSameProblemAtTheOrigin) {
   using Ct = CtState<double>;
   using Cov = Eigen::Matrix<double, 5, 5>;
   UkfStateLayout<5> layout;
@@ -189,9 +189,9 @@ TEST_P(odom_UkfAngles, StateNearPiFarFromTheOriginMatchesTheSameProblemAtTheOrig
   EXPECT_GT(a.state()(CtIndex::kPsi), -kPi);
 }
 
-INSTANTIATE_TEST_SUITE_P(Alphas, odom_UkfAngles, ::testing::Values(0.001, 0.5, 1.0));
+INSTANTIATE_TEST_SUITE_P(Alphas, OdomUkfAngles, ::testing::Values(0.001, 0.5, 1.0));
 
-TEST(odom_Ukf, WrapToPiCoversTheHalfOpenIntervalMinusPiExcludedPiIncluded) {
+TEST(OdomUkf, WrapToPiCoversTheHalfOpenIntervalMinusPiExcludedPiIncluded) {
   EXPECT_EQ(wrap_to_pi(kPi), kPi);
   EXPECT_EQ(wrap_to_pi(-kPi), kPi);
   EXPECT_NEAR(wrap_to_pi(3.0 * kPi), kPi, 1e-15);
@@ -200,7 +200,7 @@ TEST(odom_Ukf, WrapToPiCoversTheHalfOpenIntervalMinusPiExcludedPiIncluded) {
   EXPECT_EQ(wrap_to_pi(0.25), 0.25);
 }
 
-TEST(odom_Ukf, IndefiniteCovarianceIsReportedAndLeavesTheStateUntouched) {
+TEST(OdomUkf, IndefiniteCovarianceIsReportedAndLeavesTheStateUntouched) {
   UnscentedKalmanFilter<2> ukf;
   ukf.reset(Eigen::Vector2d(1.0, 2.0), Eigen::Vector2d(1.0, -1.0).asDiagonal());
   const auto identity = [](const Eigen::Vector2d& s) -> Eigen::Vector2d { return s; };
@@ -212,7 +212,7 @@ TEST(odom_Ukf, IndefiniteCovarianceIsReportedAndLeavesTheStateUntouched) {
   EXPECT_EQ(ukf.covariance()(1, 1), -1.0);
 }
 
-TEST(odom_Ukf, SingularCovarianceIsRepairedWithJitterAndCounted) {
+TEST(OdomUkf, SingularCovarianceIsRepairedWithJitterAndCounted) {
   UnscentedKalmanFilter<2> ukf;
   Eigen::Matrix2d p;
   p << 1.0, 1.0, 1.0, 1.0;  // Rank one: the plain factorisation fails.
@@ -223,7 +223,7 @@ TEST(odom_Ukf, SingularCovarianceIsRepairedWithJitterAndCounted) {
   EXPECT_EQ(Eigen::LLT<Eigen::Matrix2d>(ukf.covariance()).info(), Eigen::Success);
 }
 
-TEST(odom_Ukf, GatedMeasurementIsRefusedWithItsNisAndChangesNothing) {
+TEST(OdomUkf, GatedMeasurementIsRefusedWithItsNisAndChangesNothing) {
   UnscentedKalmanFilter<1> ukf;
   ukf.reset(Eigen::Matrix<double, 1, 1>(0.0), Eigen::Matrix<double, 1, 1>(1.0));
   const auto h = [](const Eigen::Matrix<double, 1, 1>& s) { return s; };
@@ -240,7 +240,7 @@ TEST(odom_Ukf, GatedMeasurementIsRefusedWithItsNisAndChangesNothing) {
   EXPECT_NEAR(ukf.covariance()(0, 0), 0.5, 1e-12);
 }
 
-TEST(odom_Ukf, NonFiniteModelOutputIsRefused) {
+TEST(OdomUkf, NonFiniteModelOutputIsRefused) {
   UnscentedKalmanFilter<1> ukf;
   const auto bad = [](const Eigen::Matrix<double, 1, 1>& s) -> Eigen::Matrix<double, 1, 1> {
     return s * std::numeric_limits<double>::quiet_NaN();
@@ -253,7 +253,7 @@ TEST(odom_Ukf, NonFiniteModelOutputIsRefused) {
   EXPECT_EQ(ukf.covariance()(0, 0), 1.0);
 }
 
-TEST(odom_Ukf, ChiSquareQuantilesMatchTables) {
+TEST(OdomUkf, ChiSquareQuantilesMatchTables) {
   EXPECT_NEAR(chi_square_quantile(0.95, 1), 3.841458820694124, 1e-9);
   EXPECT_NEAR(chi_square_quantile(0.95, 2), 5.991464547107979, 1e-9);
   EXPECT_NEAR(chi_square_quantile(0.999, 2), 13.815510557964274, 1e-8);
@@ -265,7 +265,7 @@ TEST(odom_Ukf, ChiSquareQuantilesMatchTables) {
   EXPECT_THROW(chi_square_quantile(0.5, 0), std::invalid_argument);
 }
 
-TEST(odom_Ukf, InvalidParametersAreRejectedByName) {
+TEST(OdomUkf, InvalidParametersAreRejectedByName) {
   auto message = [](UkfParameters p) -> std::string {
     try {
       UnscentedKalmanFilter<3> ukf(p);
@@ -289,7 +289,7 @@ TEST(odom_Ukf, InvalidParametersAreRejectedByName) {
   EXPECT_EQ(message(p), "");
 }
 
-TEST(odom_Ukf, WeightsOfTheThesisParameters) {
+TEST(OdomUkf, WeightsOfTheThesisParameters) {
   UnscentedKalmanFilter<6> ukf;                             // alpha 0.001, beta 2, kappa 0.
   EXPECT_NEAR(ukf.mean_weight0(), 1.0 - 6.0 / 6e-6, 1e-3);  // -999 999.
   EXPECT_NEAR(ukf.weight(), 1.0 / (2.0 * 6e-6), 1e-3);

@@ -16,7 +16,7 @@ mkdir -p "$out"
 
 echo "== simulated: the thesis's hall (range cut to 5.5 m, masked sectors, people walking), seeds 1-3"
 table="$out/thesis_hall_table.txt"
-printf "%-34s %5s %12s %10s %15s\n" "configuration" "seed" "preservation" "rejection" "latency median" > "$table"
+printf "%-36s %5s %12s %10s %15s\n" "configuration" "seed" "preservation" "rejection" "latency median" > "$table"
 for seed in 1 2 3; do
   $dispel sim config/scenarios/thesis_hall.yaml -o "$out/thesis_hall_$seed.bag" --seed "$seed"
   for config in thesis_sensor thesis_original; do
@@ -30,7 +30,7 @@ r = json.load(open(sys.argv[1]))
 name = {"thesis_sensor": "dispel default (thesis_sensor.yaml)",
         "thesis_original": "thesis (thesis_original.yaml)"}[sys.argv[2]]
 lat = r["detection_latency_s"]["median"]
-print("%-34s %5s %12.4f %10.4f %15s" % (name, sys.argv[3], r["preservation_rate"],
+print("%-36s %5s %12.4f %10.4f %15s" % (name, sys.argv[3], r["preservation_rate"],
       r["rejection_rate"], "-" if lat is None else "%.2f s" % lat))
 PY
   done

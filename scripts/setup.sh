@@ -13,6 +13,7 @@ packages=(
   libtf2-msgs-dev                      # ROS 1 bags (the real bag library, no ROS install needed)
   python3-rosbag                       # tests: bags we write must read in Python and rosbag info
   libcairo2-dev libfontconfig-dev      # dispel render, eval --plot: PNG and SVG pictures (Cairo)
+  libmrpt-slam-dev libmrpt-maps-dev libmrpt-obs-dev  # dispel::slam: MRPT's ICP-SLAM (tests)
 )
 
 missing=()

@@ -17,6 +17,7 @@
 
 #include "dispel/core/pose_buffer.hpp"
 #include "dispel/io/atomic_file.hpp"
+#include "dispel/io/bag_topics.hpp"
 #include "dispel/io/carmen.hpp"
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/frame_tree.hpp"
@@ -141,53 +142,28 @@ void write_filter_outputs(rosbag::Bag& out, const std::string& scan_topic, const
 // ------------------------------------------------------------------------------------------
 // ROS 1 bags.
 
-std::string bag_error(const std::string& path, const std::exception& e) {
-  return path + ": not a readable ROS 1 bag (" + e.what() + ")";
-}
-
 FilterJobStats run_bag(const FilterJobOptions& o, const Progress& progress,
                        const std::atomic<bool>* cancel) {
   FilterJobStats stats;
   stats.input_format = "rosbag";
   rosbag::Bag in;
-  try {
-    in.open(o.input, rosbag::bagmode::Read);
-  } catch (const std::exception& e) {
-    throw JobError(bag_error(o.input, e));
-  }
-
-  // What the bag holds.
-  std::map<std::string, std::string> type_of_topic;
-  {
-    rosbag::View all(in);
-    for (const rosbag::ConnectionInfo* c : all.getConnections()) {
-      type_of_topic[c->topic] = c->datatype;
-    }
-  }
-  auto topics_of_type = [&](const std::string& type) {
-    std::string list;
-    for (const auto& [topic, t] : type_of_topic) {
-      if (t == type) list += (list.empty() ? "" : ", ") + topic;
-    }
-    return list.empty() ? std::string("none") : list;
-  };
-  const auto scan_type = type_of_topic.find(o.scan_topic);
-  if (scan_type == type_of_topic.end() || scan_type->second != "sensor_msgs/LaserScan") {
+  open_bag_for_reading(in, o.input);
+  const BagTopics topics(in);
+  if (!topics.has(o.scan_topic, "sensor_msgs/LaserScan")) {
     throw JobError(o.input + ": no sensor_msgs/LaserScan topic " + o.scan_topic +
-                   " (LaserScan topics: " + topics_of_type("sensor_msgs/LaserScan") +
+                   " (LaserScan topics: " + topics.list("sensor_msgs/LaserScan") +
                    "); choose one with --scan-topic");
   }
   const std::string filtered_topic = o.scan_topic + "_filtered";
   const std::string labels_topic = o.scan_topic + "_labels";
-  if (type_of_topic.count(filtered_topic) != 0 || type_of_topic.count(labels_topic) != 0) {
+  if (topics.has(filtered_topic) || topics.has(labels_topic)) {
     throw JobError(o.input + ": already has " + filtered_topic + " or " + labels_topic +
                    "; filter the original recording");
   }
   if (!o.static_sensor) {
-    const auto odom_type = type_of_topic.find(o.odom_topic);
-    if (odom_type == type_of_topic.end() || odom_type->second != "nav_msgs/Odometry") {
+    if (!topics.has(o.odom_topic, "nav_msgs/Odometry")) {
       throw JobError(o.input + ": no nav_msgs/Odometry topic " + o.odom_topic +
-                     " (Odometry topics: " + topics_of_type("nav_msgs/Odometry") +
+                     " (Odometry topics: " + topics.list("nav_msgs/Odometry") +
                      "); choose one with --odom-topic, or use --static-sensor for a sensor that "
                      "does not move");
     }
@@ -203,9 +179,9 @@ FilterJobStats run_bag(const FilterJobOptions& o, const Progress& progress,
   std::int64_t refused_odometry = 0;
   try {
     // First pass: odometry, the sensor mount, and a look at the scanner.
-    std::vector<std::string> topics{o.scan_topic, "/tf", "/tf_static"};
-    if (!o.static_sensor) topics.push_back(o.odom_topic);
-    rosbag::View view(in, rosbag::TopicQuery(topics));
+    std::vector<std::string> wanted{o.scan_topic, "/tf", "/tf_static"};
+    if (!o.static_sensor) wanted.push_back(o.odom_topic);
+    rosbag::View view(in, rosbag::TopicQuery(wanted));
     bool have_odom_frames = false;
     for (const rosbag::MessageInstance& m : view) {
       check_not_cancelled(cancel);

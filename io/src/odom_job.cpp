@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "dispel/io/atomic_file.hpp"
+#include "dispel/io/bag_topics.hpp"
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/filter_job.hpp"
 
@@ -149,35 +150,14 @@ struct Inputs {
 
 Inputs read_bag(const OdomJobOptions& o, const OdometrySettings& settings, OdomJobStats& stats) {
   rosbag::Bag bag;
-  try {
-    bag.open(o.input, rosbag::bagmode::Read);
-  } catch (const std::exception& e) {
-    throw JobError(o.input + ": not a readable ROS 1 bag (" + e.what() + ")");
-  }
-  std::map<std::string, std::string> type_of_topic;
-  {
-    rosbag::View all(bag);
-    for (const rosbag::ConnectionInfo* c : all.getConnections()) {
-      type_of_topic[c->topic] = c->datatype;
-    }
-  }
-  const auto topics_of = [&](const std::string& type) {
-    std::vector<std::string> out;
-    for (const auto& [topic, t] : type_of_topic) {
-      if (t == type) out.push_back(topic);
-    }
-    return out;
-  };
-  const auto list = [](const std::vector<std::string>& v) {
-    std::string s;
-    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
-    return s.empty() ? std::string("none") : s;
-  };
-  const auto joint_topics = topics_of("sensor_msgs/JointState");
-  const auto odom_topics = topics_of("nav_msgs/Odometry");
+  open_bag_for_reading(bag, o.input);
+  const BagTopics topics(bag);
+  const auto list = join_topics;
+  const auto joint_topics = topics.of_type("sensor_msgs/JointState");
+  const auto odom_topics = topics.of_type("nav_msgs/Odometry");
   std::string wheel_topic = o.wheel_topic;
   if (wheel_topic.empty()) {
-    if (type_of_topic.count("/wheels") != 0) {
+    if (topics.has("/wheels")) {
       wheel_topic = "/wheels";
     } else if (joint_topics.size() == 1) {
       wheel_topic = joint_topics.front();
@@ -189,36 +169,30 @@ Inputs read_bag(const OdomJobOptions& o, const OdometrySettings& settings, OdomJ
                      "); choose one with --wheel-topic");
     }
   }
-  const auto wt = type_of_topic.find(wheel_topic);
-  if (wt == type_of_topic.end() ||
-      (wt->second != "sensor_msgs/JointState" && wt->second != "nav_msgs/Odometry")) {
+  const bool wheels_from_odometry = topics.has(wheel_topic, "nav_msgs/Odometry");
+  if (!wheels_from_odometry && !topics.has(wheel_topic, "sensor_msgs/JointState")) {
     throw JobError(o.input + ": no sensor_msgs/JointState or nav_msgs/Odometry topic " +
                    wheel_topic + " (JointState topics: " + list(joint_topics) +
                    "; Odometry topics: " + list(odom_topics) + ")");
   }
-  const bool wheels_from_odometry = wt->second == "nav_msgs/Odometry";
   std::string imu_topic = o.imu_topic;
-  const auto imu_topics = topics_of("sensor_msgs/Imu");
+  const auto imu_topics = topics.of_type("sensor_msgs/Imu");
   if (imu_topic.empty()) {
     if (imu_topics.size() == 1) imu_topic = imu_topics.front();
     if (imu_topics.size() > 1) {
       throw JobError(o.input + ": several IMU topics (" + list(imu_topics) +
                      "); choose one with --imu-topic, or --imu-topic none");
     }
-  } else if (imu_topic != "none" && (type_of_topic.count(imu_topic) == 0 ||
-                                     type_of_topic.at(imu_topic) != "sensor_msgs/Imu")) {
+  } else if (imu_topic != "none" && !topics.has(imu_topic, "sensor_msgs/Imu")) {
     throw JobError(o.input + ": no sensor_msgs/Imu topic " + imu_topic +
                    " (Imu topics: " + list(imu_topics) + ")");
   }
   if (imu_topic == "none") imu_topic.clear();
-  const auto truth_type = type_of_topic.find(o.truth_topic);
-  const bool truth_is_gps =
-      truth_type != type_of_topic.end() && truth_type->second == "sensor_msgs/NavSatFix";
-  if (!o.truth_csv.empty() && !truth_is_gps &&
-      (truth_type == type_of_topic.end() || truth_type->second != "nav_msgs/Odometry")) {
+  const bool truth_is_gps = topics.has(o.truth_topic, "sensor_msgs/NavSatFix");
+  if (!o.truth_csv.empty() && !truth_is_gps && !topics.has(o.truth_topic, "nav_msgs/Odometry")) {
     throw JobError(o.input + ": no nav_msgs/Odometry or sensor_msgs/NavSatFix topic " +
                    o.truth_topic + " for --truth-csv (Odometry topics: " + list(odom_topics) +
-                   "; NavSatFix topics: " + list(topics_of("sensor_msgs/NavSatFix")) + ")");
+                   "; NavSatFix topics: " + topics.list("sensor_msgs/NavSatFix") + ")");
   }
   stats.wheel_source = wheel_topic;
   stats.imu_source = imu_topic;
@@ -229,10 +203,10 @@ Inputs read_bag(const OdomJobOptions& o, const OdometrySettings& settings, OdomJ
   bool have_origin = false;
   double lat0 = 0.0, lon0 = 0.0;
   try {
-    std::vector<std::string> topics{wheel_topic};
-    if (!imu_topic.empty()) topics.push_back(imu_topic);
-    if (!o.truth_csv.empty()) topics.push_back(o.truth_topic);
-    rosbag::View view(bag, rosbag::TopicQuery(topics));
+    std::vector<std::string> wanted{wheel_topic};
+    if (!imu_topic.empty()) wanted.push_back(imu_topic);
+    if (!o.truth_csv.empty()) wanted.push_back(o.truth_topic);
+    rosbag::View view(bag, rosbag::TopicQuery(wanted));
     for (const rosbag::MessageInstance& m : view) {
       const std::string& topic = m.getTopic();
       if (topic == wheel_topic) {

@@ -18,6 +18,7 @@
 #include "dispel/core/dynamic_filter.hpp"
 #include "dispel/core/pose_buffer.hpp"
 #include "dispel/core/segmentation.hpp"
+#include "dispel/io/bag_topics.hpp"
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/filter_job.hpp"
 #include "dispel/io/frame_tree.hpp"
@@ -65,28 +66,19 @@ std::string seconds_text(double s) { return format_number(s, 1) + " s"; }
 // The bag: its topics, and the sensor's pose at a scan's stamp.
 
 struct BagInfo {
-  std::map<std::string, std::string> type_of_topic;
+  explicit BagInfo(const rosbag::Bag& bag) : topics(bag) {}
+  BagTopics topics;
   double begin_s = 0.0, end_s = 0.0;
 
   bool has(const std::string& topic, const std::string& type) const {
-    const auto it = type_of_topic.find(topic);
-    return it != type_of_topic.end() && it->second == type;
+    return topics.has(topic, type);
   }
-  std::string topics_of_type(const std::string& type) const {
-    std::string list;
-    for (const auto& [topic, t] : type_of_topic) {
-      if (t == type) list += (list.empty() ? "" : ", ") + topic;
-    }
-    return list.empty() ? std::string("none") : list;
-  }
+  std::string topics_of_type(const std::string& type) const { return topics.list(type); }
 };
 
 BagInfo inspect(rosbag::Bag& bag) {
-  BagInfo info;
+  BagInfo info(bag);
   rosbag::View all(bag);
-  for (const rosbag::ConnectionInfo* c : all.getConnections()) {
-    info.type_of_topic[c->topic] = c->datatype;
-  }
   if (all.size() > 0) {
     info.begin_s = all.getBeginTime().toSec();
     info.end_s = all.getEndTime().toSec();
@@ -873,11 +865,7 @@ RenderResult render_bag(const RenderOptions& o, const std::atomic<bool>* cancel)
     }
   }
   rosbag::Bag bag;
-  try {
-    bag.open(o.input, rosbag::bagmode::Read);
-  } catch (const std::exception& e) {
-    throw JobError(o.input + ": not a readable ROS 1 bag (" + e.what() + ")");
-  }
+  open_bag_for_reading(bag, o.input);
   try {
     const BagInfo info = inspect(bag);
     if (!info.has(o.scan_topic, "sensor_msgs/LaserScan")) {

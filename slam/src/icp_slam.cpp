@@ -21,6 +21,7 @@
 #include <utility>
 
 #include "dispel/core/pose_buffer.hpp"
+#include "dispel/io/bag_topics.hpp"
 #include "dispel/io/filter_job.hpp"
 #include "dispel/io/frame_tree.hpp"
 #include "dispel/io/ros_convert.hpp"
@@ -212,34 +213,15 @@ SlamResult run_icp_slam_full(const SlamOptions& o) {
   IcpSlamEngine engine(result.engine_config);
 
   rosbag::Bag in;
-  try {
-    in.open(o.input, rosbag::bagmode::Read);
-  } catch (const std::exception& e) {
-    throw JobError(o.input + ": not a readable ROS 1 bag (" + e.what() + ")");
-  }
-  std::map<std::string, std::string> type_of_topic;
-  {
-    rosbag::View all(in);
-    for (const rosbag::ConnectionInfo* c : all.getConnections()) {
-      type_of_topic[c->topic] = c->datatype;
-    }
-  }
-  auto topics_of_type = [&](const std::string& type) {
-    std::string list;
-    for (const auto& [topic, t] : type_of_topic) {
-      if (t == type) list += (list.empty() ? "" : ", ") + topic;
-    }
-    return list.empty() ? std::string("none") : list;
-  };
-  const auto scan_type = type_of_topic.find(o.scan_topic);
-  if (scan_type == type_of_topic.end() || scan_type->second != "sensor_msgs/LaserScan") {
+  io::open_bag_for_reading(in, o.input);
+  const io::BagTopics topics(in);
+  if (!topics.has(o.scan_topic, "sensor_msgs/LaserScan")) {
     throw JobError(o.input + ": no sensor_msgs/LaserScan topic " + o.scan_topic +
-                   " (LaserScan topics: " + topics_of_type("sensor_msgs/LaserScan") + ")");
+                   " (LaserScan topics: " + topics.list("sensor_msgs/LaserScan") + ")");
   }
-  const auto odom_type = type_of_topic.find(o.odom_topic);
-  if (odom_type == type_of_topic.end() || odom_type->second != "nav_msgs/Odometry") {
+  if (!topics.has(o.odom_topic, "nav_msgs/Odometry")) {
     throw JobError(o.input + ": no nav_msgs/Odometry topic " + o.odom_topic +
-                   " (Odometry topics: " + topics_of_type("nav_msgs/Odometry") + ")");
+                   " (Odometry topics: " + topics.list("nav_msgs/Odometry") + ")");
   }
 
   // First pass: odometry, the laser mount, the laser's frame.

@@ -115,16 +115,18 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
       config_.no_return_is_free
           ? std::min(config_.free_range_m, static_cast<double>(scan.range_max_m))
           : 0.0;
-  const auto direction = [&](std::size_t b) {
+  // Each beam's direction in the fixed frame, once per scan (both passes below need it).
+  directions_.resize(scan.size());
+  for (std::size_t b = 0; b < scan.size(); ++b) {
     const double bearing = sensor_pose.yaw_rad + scan.bearing_rad(b);
-    return Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
-  };
+    directions_[b] = Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+  }
   const int cap = config_.min_free_observations + config_.max_recent_hits;
   // Hits first: a cell hit in this scan counts as hit, whatever other beams passed through it.
   for (std::size_t b = 0; b < scan.size(); ++b) {
     if (!scan.is_valid(b)) continue;
     std::int64_t i = 0;
-    if (!index_of(origin + scan.ranges_m[b] * direction(b), i)) continue;
+    if (!index_of(origin + scan.ranges_m[b] * directions_[b], i)) continue;
     Cell& cell = cells_[static_cast<std::size_t>(i)];
     if (cell.last_scan == scans_) continue;
     cell.last_scan = scans_;
@@ -159,7 +161,7 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     if (!(free_until > start)) continue;
     // Every cell the beam crosses from start to free_until, each once (Amanatides and Woo's
     // traversal, in cell units).
-    const Eigen::Vector2d dir = direction(b);
+    const Eigen::Vector2d& dir = directions_[b];
     const Eigen::Vector2d from = origin + start * dir;
     const double fx = (from.x() - origin_.x()) / c, fy = (from.y() - origin_.y()) / c;
     const double cx = std::floor(fx), cy = std::floor(fy);

@@ -326,16 +326,16 @@ bool OdometryFusion::admit(double t_s, bool finite, Counts& counts, OdometryEven
   return true;
 }
 
-template <class Update>
+template <class Agrees, class Update>
 OdometryEvent OdometryFusion::fuse(double t_s, double gate_nis, Counts& counts,
-                                   double& gated_since_s, bool other_sensor_agrees,
+                                   double& gated_since_s, Agrees&& other_sensor_agrees,
                                    Update&& update) {
   OdometryEvent event = OdometryEvent::kAccepted;
   UkfUpdateResult result = update(engine_.get(), gate_nis);
   if (result.status == UkfStatus::kGated) {
     if (std::isnan(gated_since_s)) gated_since_s = t_s;
-    if (other_sensor_agrees || (config_.gate_override_after_s > 0.0 &&
-                                t_s - gated_since_s >= config_.gate_override_after_s)) {
+    if (other_sensor_agrees() || (config_.gate_override_after_s > 0.0 &&
+                                  t_s - gated_since_s >= config_.gate_override_after_s)) {
       result = update(engine_.get(), std::numeric_limits<double>::infinity());
       event = OdometryEvent::kGateOverridden;
     } else {
@@ -360,8 +360,12 @@ OdometryEvent OdometryFusion::add_wheels(double t_s, double v_left_mps, double v
   }
   const double v = wheel_linear_velocity(v_left_mps, v_right_mps);
   const double omega = wheel_yaw_rate(v_left_mps, v_right_mps, config_.track_width_m);
-  const bool imu_agrees =
-      agrees(t_s, omega, last_imu_yaw_rate_ - engine_->estimate().gyro_bias_radps, last_imu_t_s_);
+  // Read before this measurement changes them; the state is the predicted one while gated.
+  const double imu_rate = last_imu_yaw_rate_, imu_t_s = last_imu_t_s_;
+  const auto imu_agrees = [&] {
+    const OdometryEstimate now = engine_->estimate();
+    return agrees(t_s, omega, imu_rate - now.gyro_bias_radps, imu_t_s, now.omega_radps);
+  };
   last_wheel_yaw_rate_ = omega;
   last_wheel_t_s_ = t_s;
   constexpr double kImuRecent_s = 1.0;
@@ -383,8 +387,11 @@ OdometryEvent OdometryFusion::add_imu(double t_s, double yaw_rate_radps) {
       imu_seen_ ? f * yaw_rate_radps + (1.0 - f) * imu_smoothed_radps_ : yaw_rate_radps;
   imu_seen_ = true;
   const double rate = imu_smoothed_radps_;
-  const bool wheels_agree = agrees(t_s, rate - engine_->estimate().gyro_bias_radps,
-                                   last_wheel_yaw_rate_, last_wheel_t_s_);
+  const double wheel_rate = last_wheel_yaw_rate_, wheel_t_s = last_wheel_t_s_;
+  const auto wheels_agree = [&] {
+    const OdometryEstimate now = engine_->estimate();
+    return agrees(t_s, rate - now.gyro_bias_radps, wheel_rate, wheel_t_s, now.omega_radps);
+  };
   last_imu_yaw_rate_ = rate;
   last_imu_t_s_ = t_s;
   return fuse(
@@ -392,15 +399,15 @@ OdometryEvent OdometryFusion::add_imu(double t_s, double yaw_rate_radps) {
       [rate](odometry_detail::Engine* e, double gate) { return e->update_imu(rate, gate); });
 }
 
-bool OdometryFusion::agrees(double t_s, double yaw_rate_radps, double other_rate,
-                            double other_t_s) const {
+bool OdometryFusion::agrees(double t_s, double yaw_rate_radps, double other_rate, double other_t_s,
+                            double predicted_yaw_rate_radps) const {
   // Both sensors must see the same turn, and one the filter did not expect: a wheel measurement
   // whose speed alone jumped (both wheels spinning, a push) gets no help from a quiet gyro.
   const double tolerance = config_.gate_agreement_radps;
   return tolerance > 0.0 && std::isfinite(other_t_s) &&
          t_s - other_t_s <= config_.gate_agreement_window_s &&
          std::abs(yaw_rate_radps - other_rate) <= tolerance &&
-         std::abs(other_rate - engine_->estimate().omega_radps) > tolerance;
+         std::abs(other_rate - predicted_yaw_rate_radps) > tolerance;
 }
 
 OdometryEstimate OdometryFusion::estimate() const {

@@ -36,6 +36,19 @@ std::vector<std::string> BagTopics::of_type(const std::string& type) const {
 
 std::string BagTopics::list(const std::string& type) const { return join_topics(of_type(type)); }
 
+void rethrow_as_recording_error(const std::string& path) {
+  try {
+    throw;
+  } catch (const JobError&) {
+    throw;
+  } catch (const JobCancelled&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw JobError(path + ": cannot read the recording (" + e.what() +
+                   "); it may be truncated or corrupt");
+  }
+}
+
 std::string join_topics(const std::vector<std::string>& topics) {
   std::string s;
   for (const auto& t : topics) s += (s.empty() ? "" : ", ") + t;

@@ -221,11 +221,8 @@ FilterJobStats run_bag(const FilterJobOptions& o, const Progress& progress,
         }
       }
     }
-  } catch (const JobCancelled&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw JobError(o.input + ": cannot read the recording (" + e.what() +
-                   "); it may be truncated or corrupt");
+  } catch (...) {
+    rethrow_as_recording_error(o.input);
   }
   if (first_stamps.empty()) throw JobError(o.input + ": no scans on " + o.scan_topic);
   if (!o.static_sensor && odometry.empty()) {
@@ -280,13 +277,8 @@ FilterJobStats run_bag(const FilterJobOptions& o, const Progress& progress,
       stats.messages_out += 2;
     }
     out.close();
-  } catch (const JobError&) {
-    throw;
-  } catch (const JobCancelled&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw JobError(o.input + ": cannot read the recording (" + e.what() +
-                   "); it may be truncated or corrupt");
+  } catch (...) {
+    rethrow_as_recording_error(o.input);
   }
   if (progress) progress(1.0);
   output.commit();

@@ -267,11 +267,8 @@ Inputs read_bag(const OdomJobOptions& o, const OdometrySettings& settings, OdomJ
         }
       }
     }
-  } catch (const JobError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw JobError(o.input + ": cannot read the recording (" + e.what() +
-                   "); it may be truncated or corrupt");
+  } catch (...) {
+    rethrow_as_recording_error(o.input);
   }
   return in;
 }

@@ -885,13 +885,8 @@ RenderResult render_bag(const RenderOptions& o, const std::atomic<bool>* cancel)
     const FirstPass first = read_poses(bag, info, o, cancel);
     return o.view == "map" ? render_map(bag, info, first, o, cancel)
                            : render_scan(bag, info, first, o, cancel);
-  } catch (const JobError&) {
-    throw;
-  } catch (const JobCancelled&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw JobError(o.input + ": cannot read the recording (" + e.what() +
-                   "); it may be truncated or corrupt");
+  } catch (...) {
+    rethrow_as_recording_error(o.input);
   }
 }
 

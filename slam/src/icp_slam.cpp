@@ -266,9 +266,8 @@ SlamResult run_icp_slam_full(const SlamOptions& o) {
         }
       }
     }
-  } catch (const std::exception& e) {
-    throw JobError(o.input + ": cannot read the recording (" + e.what() +
-                   "); it may be truncated or corrupt");
+  } catch (...) {
+    io::rethrow_as_recording_error(o.input);
   }
   if (!have_laser_frame) throw JobError(o.input + ": no scans on " + o.scan_topic);
   if (odometry.empty()) throw JobError(o.input + ": no usable odometry on " + o.odom_topic);
@@ -305,11 +304,8 @@ SlamResult run_icp_slam_full(const SlamOptions& o) {
       result.trajectory.push_back(point(scan.stamp_s, *estimate));
       result.odometry.push_back(point(scan.stamp_s, odom_pose));
     }
-  } catch (const JobError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw JobError(o.input + ": cannot read the recording (" + e.what() +
-                   "); it may be truncated or corrupt");
+  } catch (...) {
+    io::rethrow_as_recording_error(o.input);
   }
   if (result.scans_used == 0) {
     throw JobError(o.input + ": no scan on " + o.scan_topic + " has odometry on " + o.odom_topic +

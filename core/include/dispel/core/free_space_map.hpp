@@ -96,7 +96,8 @@ class FreeSpaceMap {
   std::uint32_t scans_ = 0;
   double stamp_s_ = 0.0;  // Of the latest scan.
   std::vector<Cell> cells_;
-  std::vector<double> free_until_;  // Scratch: per beam, how far it saw free space.
+  std::vector<double> free_until_;           // Scratch: per beam, how far it saw free space.
+  std::vector<Eigen::Vector2d> directions_;  // Scratch: per beam, its direction.
 };
 
 }  // namespace dispel

@@ -190,11 +190,13 @@ class OdometryFusion {
   using Counts = std::array<std::int64_t, kOdometryEventCount>;
   // Rejects a non-finite or out-of-order input, else predicts to t_s (false: the predictor failed).
   bool admit(double t_s, bool finite, Counts& counts, OdometryEvent& event);
-  template <class Update>
+  // other_sensor_agrees() is asked only when the gate refuses the measurement.
+  template <class Agrees, class Update>
   OdometryEvent fuse(double t_s, double gate_nis, Counts& counts, double& gated_since_s,
-                     bool other_sensor_agrees, Update&& update);
+                     Agrees&& other_sensor_agrees, Update&& update);
   // Whether the other sensor's latest yaw rate, recent enough, matches @p yaw_rate_radps.
-  bool agrees(double t_s, double yaw_rate_radps, double other_rate, double other_t_s) const;
+  bool agrees(double t_s, double yaw_rate_radps, double other_rate, double other_t_s,
+              double predicted_yaw_rate_radps) const;
 
   OdometryConfig config_;
   std::unique_ptr<odometry_detail::Engine> engine_;

@@ -32,6 +32,11 @@ class BagTopics {
   std::map<std::string, std::string> type_of_topic_;
 };
 
+/// For `catch (...)` around reading a recording: rethrows a JobError or JobCancelled as it is,
+/// and any other std::exception (the bag library's, on a truncated or corrupt file) as
+/// JobError "<path>: cannot read the recording (...); it may be truncated or corrupt".
+[[noreturn]] void rethrow_as_recording_error(const std::string& path);
+
 /// "a, b, c" of @p topics, or "none".
 std::string join_topics(const std::vector<std::string>& topics);
 

@@ -1,0 +1,57 @@
+#!/usr/bin/env python3
+"""The filter on simulated scenarios against their ground truth, means over seeds: the figures of
+README's "Results on the simulated thesis hall" and docs/simulator.md.
+
+usage: filter_sim_eval.py DISPEL SCENARIO.yaml CONFIG.yaml [--seeds N] [--set section.key=value ...]
+
+For each seed 1..N (default 5): dispel sim -> dispel filter --config -> dispel eval --json. --set
+changes one key of the configuration, e.g. --set classification.presumption=guilt
+--set tracking.matching=nearest_neighbour. Prints mean preservation and rejection and the median
+over seeds of each run's median detection latency."""
+import json, os, re, statistics, subprocess, sys, tempfile
+
+def main():
+    args = sys.argv[1:]
+    dispel, scenario, config = args[0], args[1], args[2]
+    seeds = int(args[args.index('--seeds') + 1]) if '--seeds' in args else 5
+    settings = [args[i + 1] for i, a in enumerate(args) if a == '--set']
+    text = open(config).read()
+    for s in settings:
+        key, value = s.split('=', 1)
+        section, name = key.split('.', 1)
+        if re.search(r'^%s:\s*(#.*)?$' % section, text, re.M):
+            text = re.sub(r'^(%s:\s*(#.*)?)$' % section, r'\1\n  %s: %s' % (name, value), text,
+                          count=1, flags=re.M)
+        else:
+            text += '\n%s:\n  %s: %s\n' % (section, name, value)
+    runs = []
+    with tempfile.TemporaryDirectory() as tmp:
+        cfg = os.path.join(tmp, 'config.yaml')
+        open(cfg, 'w').write(text)
+        for seed in range(1, seeds + 1):
+            sim, out = os.path.join(tmp, 'sim.bag'), os.path.join(tmp, 'filtered.bag')
+            subprocess.run([dispel, 'sim', scenario, '-o', sim, '--seed', str(seed)], check=True,
+                           stdout=subprocess.DEVNULL)
+            subprocess.run([dispel, 'filter', sim, '-o', out, '--config', cfg], check=True,
+                           stdout=subprocess.DEVNULL)
+            runs.append(json.loads(subprocess.run(
+                [dispel, 'eval', '--truth', sim, '--result', out, '--json'], check=True,
+                capture_output=True, text=True).stdout))
+    def mean(key):
+        values = [r[key] for r in runs if r[key] is not None]
+        return statistics.mean(values) if values else float('nan')
+    latencies = [r['detection_latency_s']['median'] for r in runs
+                 if r['detection_latency_s']['median'] is not None]
+    print('%s, %s%s, seeds 1-%d: preservation %.4f, rejection %.4f, latency %s' % (
+        os.path.basename(scenario), os.path.basename(config),
+        ''.join(' --set ' + s for s in settings), seeds, mean('preservation_rate'),
+        mean('rejection_rate'), '%.2f s' % statistics.median(latencies) if latencies else '-'))
+    for seed, r in enumerate(runs, 1):
+        lat = r['detection_latency_s']['median']
+        print('  seed %d: preservation %.4f, rejection %s, latency %s' % (
+            seed, r['preservation_rate'],
+            '-' if r['rejection_rate'] is None else '%.4f' % r['rejection_rate'],
+            '-' if lat is None else '%.2f s' % lat))
+
+if __name__ == '__main__':
+    main()

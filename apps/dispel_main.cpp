@@ -10,6 +10,9 @@
 #include "render_command.hpp"
 #include "sim_commands.hpp"
 #endif
+#ifdef DISPEL_HAVE_SLAM
+#include "slam_command.hpp"
+#endif
 
 #ifndef DISPEL_VERSION
 #define DISPEL_VERSION "unknown"
@@ -149,6 +152,62 @@ int main(int argc, char** argv) {
   eval_trajectory_cmd->add_flag("--json", eval_trajectory.json, "Print JSON");
 #endif
 
+#ifdef DISPEL_HAVE_SLAM
+  dispel::apps::SlamCommandOptions slam;
+  std::string slam_ini;
+  slam.job.scan_topic.clear();
+  CLI::App* slam_cmd = app.add_subcommand(
+      "slam", "Run MRPT's ICP-SLAM over a recording's scans and odometry; write its trajectory");
+  slam_cmd->add_option("input", slam.job.input, "IN.bag (raw, or filtered by dispel filter)")
+      ->required();
+  slam_cmd->add_option("-o,--output", slam.output, "TRAJECTORY.csv to write (t,x,y,yaw)")
+      ->required();
+  slam_cmd->add_option("--scan-topic", slam.job.scan_topic,
+                       "LaserScan topic (default: /scan_filtered if the bag has it, else /scan)");
+  slam_cmd->add_option("--odom-topic", slam.job.odom_topic, "Odometry topic (the motion input)")
+      ->capture_default_str();
+  slam_cmd->add_option("--engine-config", slam_ini,
+                       "MRPT .ini over the defaults ([MappingApplication], [ICP], ...)");
+  slam_cmd->add_option("--odom-csv", slam.odom_csv,
+                       "Also write the odometry at the same scans as t,x,y,yaw here");
+  slam_cmd->add_flag("--json", slam.json, "Print the counters as JSON");
+
+  dispel::apps::ExperimentCommandOptions experiment;
+  std::string experiment_config, experiment_ini;
+  double experiment_duration = 0.0, experiment_yaw_deg = 10.0;
+  CLI::App* experiment_cmd = app.add_subcommand(
+      "experiment",
+      "Simulate a scenario over many seeds; run SLAM on the raw, filtered and oracle scans and "
+      "compare each with the truth");
+  experiment_cmd->add_option("scenario", experiment.job.scenario, "SCENARIO.yaml")->required();
+  experiment_cmd->add_option("--seeds", experiment.job.seeds, "How many seeds")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  experiment_cmd->add_option("--first-seed", experiment.job.first_seed, "The first seed")
+      ->capture_default_str();
+  CLI::Option* experiment_duration_opt = experiment_cmd->add_option(
+      "--duration", experiment_duration, "Seconds per run (default: the scenario's)");
+  experiment_duration_opt->check(CLI::PositiveNumber);
+  experiment_cmd->add_option("--out", experiment.out_dir,
+                             "Write runs.csv, summary.json and the trajectories here");
+  experiment_cmd->add_flag("--json", experiment.json, "Print the summary as JSON");
+  experiment_cmd->add_option("--config", experiment_config,
+                             "The filter's YAML configuration (default: dispel's defaults)");
+  experiment_cmd->add_option("--engine-config", experiment_ini, "MRPT .ini over the defaults");
+  experiment_cmd
+      ->add_option("--diverged-at", experiment.job.divergence_position_m,
+                   "A run diverged when its position error ever exceeds this (m)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  experiment_cmd
+      ->add_option("--diverged-at-yaw", experiment_yaw_deg,
+                   "... or its yaw error ever exceeds this (deg)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  experiment_cmd->add_flag("--keep-bags", experiment.job.keep_bags,
+                           "Keep the bags of each seed under OUT/bags/ (needs --out)");
+#endif
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -174,6 +233,23 @@ int main(int argc, char** argv) {
       if (from_opt->count() > 0) render.job.from_s = render_from;
       if (to_opt->count() > 0) render.job.to_s = render_to;
       return dispel::apps::run_render(render);
+    }
+#endif
+#ifdef DISPEL_HAVE_SLAM
+    if (*slam_cmd) {
+      if (!slam_ini.empty()) slam.job.engine_config_ini = slam_ini;
+      return dispel::apps::run_slam(slam);
+    }
+    if (*experiment_cmd) {
+      if (!experiment_config.empty()) experiment.job.filter_config = experiment_config;
+      if (!experiment_ini.empty()) experiment.job.engine_config_ini = experiment_ini;
+      if (experiment_duration_opt->count() > 0) experiment.job.duration_s = experiment_duration;
+      experiment.job.divergence_yaw_rad = experiment_yaw_deg * 3.14159265358979323846 / 180.0;
+      if (experiment.job.keep_bags && experiment.out_dir.empty()) {
+        std::cerr << "dispel experiment: --keep-bags needs --out\n";
+        return 1;
+      }
+      return dispel::apps::run_experiment(experiment);
     }
 #endif
   } catch (const std::exception& e) {

@@ -75,6 +75,8 @@ int run_eval_trajectory(const EvalTrajectoryOptions& o) {
     j["rmse_yaw_rad"] = number(e.rmse_yaw_rad);
     j["final_position_error_m"] = e.final_position_error_m;
     j["final_yaw_error_rad"] = number(e.final_yaw_error_rad);
+    j["max_position_error_m"] = e.max_position_error_m;
+    j["max_yaw_error_rad"] = number(e.max_yaw_error_rad);
     j["path_length_m"] = e.path_length_m;
     j["compared"] = e.compared;
     j["outside"] = e.outside;
@@ -88,6 +90,8 @@ int run_eval_trajectory(const EvalTrajectoryOptions& o) {
   std::printf("%-28s %10.4f rad\n", "RMSE yaw", e.rmse_yaw_rad);
   std::printf("%-28s %10.4f m\n", "final position error", e.final_position_error_m);
   std::printf("%-28s %10.4f rad\n", "final yaw error", e.final_yaw_error_rad);
+  std::printf("%-28s %10.4f m\n", "largest position error", e.max_position_error_m);
+  std::printf("%-28s %10.4f rad\n", "largest yaw error", e.max_yaw_error_rad);
   std::printf("%-28s %10.3f m (%lld truth poses compared, %lld outside the estimate)\n",
               "path length", e.path_length_m, static_cast<long long>(e.compared),
               static_cast<long long>(e.outside));

@@ -125,6 +125,8 @@ TrajectoryErrors compare_trajectories(const std::vector<TrajectoryPoint>& truth,
     sum_yaw2 += dyaw * dyaw;
     e.final_position_error_m = std::hypot(dx, dy);
     e.final_yaw_error_rad = std::abs(dyaw);
+    e.max_position_error_m = std::max(e.max_position_error_m, e.final_position_error_m);
+    if (!std::isnan(dyaw)) e.max_yaw_error_rad = std::max(e.max_yaw_error_rad, std::abs(dyaw));
     if (previous != nullptr) {
       e.path_length_m += std::hypot(t.x_m - previous->x_m, t.y_m - previous->y_m);
     }
@@ -140,6 +142,7 @@ TrajectoryErrors compare_trajectories(const std::vector<TrajectoryPoint>& truth,
   e.rmse_position_m = std::sqrt((sum_x2 + sum_y2) / n);
   e.rmse_yaw_rad = std::sqrt(sum_yaw2 / n);  // NaN when the truth has no yaw.
   e.alignment_rotation_rad = theta;
+  if (std::isnan(e.rmse_yaw_rad)) e.max_yaw_error_rad = e.rmse_yaw_rad;
   return e;
 }
 

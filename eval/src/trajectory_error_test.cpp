@@ -41,6 +41,21 @@ TEST(TrajectoryError, AConstantOffsetIsTheRmseAndTheFinalError) {
   EXPECT_NEAR(e.rmse_yaw_rad, 0.05, 1e-9);
   EXPECT_NEAR(e.final_position_error_m, 0.3, 1e-9);
   EXPECT_NEAR(e.final_yaw_error_rad, 0.05, 1e-9);
+  EXPECT_NEAR(e.max_position_error_m, 0.3, 1e-9);
+  EXPECT_NEAR(e.max_yaw_error_rad, 0.05, 1e-9);
+}
+
+TEST(TrajectoryError, TheLargestErrorIsKeptWhereverItOccurs) {
+  // A detour of 0.8 m and 0.3 rad in the middle of an otherwise exact estimate.
+  const auto truth = circle(0.1, 20.0);
+  auto estimate = truth;
+  estimate[100].y_m += 0.8;
+  estimate[100].yaw_rad -= 0.3;
+  const TrajectoryErrors e = compare_trajectories(truth, estimate);
+  EXPECT_NEAR(e.max_position_error_m, 0.8, 1e-9);
+  EXPECT_NEAR(e.max_yaw_error_rad, 0.3, 1e-9);
+  EXPECT_NEAR(e.final_position_error_m, 0.0, 1e-9);
+  EXPECT_LT(e.rmse_position_m, 0.1);
 }
 
 TEST(TrajectoryError, TheEstimateIsInterpolatedAtTheTruthsTimesAcrossTheYawSeam) {

@@ -56,6 +56,7 @@ rosbag::compression::CompressionType bag_compression(Compression c) {
 }
 
 DynamicFilterConfig base_config(const FilterJobOptions& o) {
+  if (o.config) return *o.config;
   if (!o.config_path) return default_config();
   try {
     return load_filter_config(*o.config_path);

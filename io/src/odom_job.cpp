@@ -393,16 +393,21 @@ OdomJobStats run_odom_job(const OdomJobOptions& o) {
   if (stats.rows == 0) throw JobError(stats.wheel_source + ": no usable wheel speeds");
 
   if (!o.truth_csv.empty()) {
-    CsvOut truth(o.truth_csv);
-    std::fprintf(truth.f, "t,x,y,yaw\n");
-    for (const auto& p : in.truth) {
-      std::fprintf(truth.f, "%.9f,%.9g,%.9g,%.9g\n", p.t_s, p.x_m, p.y_m, p.yaw_rad);
-      ++stats.truth_rows;
-    }
-    truth.commit(o.truth_csv);
+    write_trajectory_csv(o.truth_csv, in.truth);
+    stats.truth_rows = static_cast<std::int64_t>(in.truth.size());
   }
   out.commit(o.output);
   return stats;
+}
+
+void write_trajectory_csv(const std::string& path,
+                          const std::vector<eval::TrajectoryPoint>& trajectory) {
+  CsvOut out(path);
+  std::fprintf(out.f, "t,x,y,yaw\n");
+  for (const auto& p : trajectory) {
+    std::fprintf(out.f, "%.9f,%.9g,%.9g,%.9g\n", p.t_s, p.x_m, p.y_m, p.yaw_rad);
+  }
+  out.commit(path);
 }
 
 std::vector<eval::TrajectoryPoint> read_trajectory_csv(const std::string& path) {

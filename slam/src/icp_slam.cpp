@@ -49,7 +49,7 @@ pointsMap_count = 1
 likelihoodMapSelection = -1
 
 [MappingApplication_pointsMap_00_insertOpts]
-minDistBetweenLaserPoints = 0.05
+minDistBetweenLaserPoints = 0.02
 fuseWithExisting = false
 isPlanarMap = true
 
@@ -63,8 +63,8 @@ thresholdAng_DEG = 5
 ALFA = 0.8
 smallestThresholdDist = 0.05
 onlyClosestCorrespondences = true
-onlyUniqueRobust = false
-corresponding_points_decimation = 2
+onlyUniqueRobust = true
+corresponding_points_decimation = 1
 )ini";
 
 std::string trim(const std::string& s) {
@@ -206,15 +206,22 @@ std::string engine_config(const std::optional<std::string>& ini_path) {
   return merged.text();
 }
 
-SlamResult run_icp_slam_full(const SlamOptions& o) {
-  check_input_file(o.input);
+SlamResult run_icp_slam_full(const SlamOptions& options) {
+  check_input_file(options.input);
   SlamResult result;
-  result.engine_config = engine_config(o.engine_config_ini);
+  result.engine_config = engine_config(options.engine_config_ini);
   IcpSlamEngine engine(result.engine_config);
 
   rosbag::Bag in;
-  io::open_bag_for_reading(in, o.input);
+  io::open_bag_for_reading(in, options.input);
   const io::BagTopics topics(in);
+  SlamOptions o = options;
+  if (o.scan_topic.empty()) {
+    // What `dispel filter` writes, when it is there.
+    o.scan_topic =
+        topics.has("/scan_filtered", "sensor_msgs/LaserScan") ? "/scan_filtered" : "/scan";
+  }
+  result.scan_topic = o.scan_topic;
   if (!topics.has(o.scan_topic, "sensor_msgs/LaserScan")) {
     throw JobError(o.input + ": no sensor_msgs/LaserScan topic " + o.scan_topic +
                    " (LaserScan topics: " + topics.list("sensor_msgs/LaserScan") + ")");

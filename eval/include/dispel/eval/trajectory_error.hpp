@@ -26,6 +26,8 @@ struct TrajectoryErrors {
   double rmse_yaw_rad = 0.0;            ///< Of the wrapped yaw differences.
   double final_position_error_m = 0.0;  ///< At the last compared truth sample.
   double final_yaw_error_rad = 0.0;     ///< Absolute, wrapped, at the same sample.
+  double max_position_error_m = 0.0;    ///< The largest over the compared samples.
+  double max_yaw_error_rad = 0.0;       ///< The largest absolute; NaN when the truth has no yaw.
   double path_length_m = 0.0;           ///< Of the truth, over the compared samples.
   std::int64_t compared = 0;            ///< Truth samples compared.
   std::int64_t outside = 0;             ///< Truth samples outside the estimate's time span.

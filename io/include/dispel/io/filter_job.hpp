@@ -19,9 +19,10 @@ namespace dispel::io {
 enum class Compression { kNone, kBz2, kLz4 };
 
 struct FilterJobOptions {
-  std::string input;                       ///< .bag, or .log / .clf (CARMEN).
-  std::string output;                      ///< The bag to write.
-  std::optional<std::string> config_path;  ///< YAML; the thesis's defaults without it.
+  std::string input;                          ///< .bag, or .log / .clf (CARMEN).
+  std::string output;                         ///< The bag to write.
+  std::optional<std::string> config_path;     ///< YAML; default_config() without it.
+  std::optional<DynamicFilterConfig> config;  ///< Used instead of config_path when given.
   std::string scan_topic = "/scan";
   std::string odom_topic = "/odom";
   bool static_sensor = false;     ///< The sensor does not move: identity pose, no odometry.

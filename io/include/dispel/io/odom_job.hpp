@@ -56,4 +56,9 @@ OdomJobStats run_odom_job(const OdomJobOptions& options);
 /// columns ignored), then one row per pose. @throws JobError naming the file and line
 std::vector<eval::TrajectoryPoint> read_trajectory_csv(const std::string& path);
 
+/// Writes @p trajectory as a CSV with the header t,x,y,yaw (what read_trajectory_csv() reads);
+/// the file appears only when complete. @throws JobError when it cannot be written
+void write_trajectory_csv(const std::string& path,
+                          const std::vector<eval::TrajectoryPoint>& trajectory);
+
 }  // namespace dispel::io

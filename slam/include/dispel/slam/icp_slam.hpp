@@ -18,8 +18,10 @@ namespace dispel::slam {
 
 /// What to run the engine on, and how.
 struct SlamOptions {
-  std::string input;                             ///< A ROS 1 bag.
-  std::string scan_topic = "/scan";              ///< sensor_msgs/LaserScan.
+  std::string input;  ///< A ROS 1 bag.
+  /// sensor_msgs/LaserScan. Empty: /scan_filtered (what `dispel filter` writes) when the bag
+  /// has it, else /scan.
+  std::string scan_topic = "/scan";
   std::string odom_topic = "/odom";              ///< nav_msgs/Odometry: the motion input.
   std::optional<std::string> engine_config_ini;  ///< MRPT-style .ini over the defaults.
   /// How far beyond the first or last odometry message a scan's odometry may be taken from it.
@@ -48,6 +50,7 @@ struct SlamResult {
   std::int64_t beams_invalid = 0;      ///< Beams marked invalid (NaN, inf, out of limits).
   std::int64_t odometry_refused = 0;   ///< Odometry messages out of order or not finite.
   std::string engine_config;           ///< The engine configuration used (ini text).
+  std::string scan_topic;              ///< The scan topic read.
 };
 
 /// The engine's default configuration for a 2D LiDAR, as MRPT ini text (sections

@@ -1,0 +1,263 @@
+#include "slam_command.hpp"
+
+#include <stdlib.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <system_error>
+
+#include "dispel/io/atomic_file.hpp"
+#include "dispel/io/filter_job.hpp"
+#include "dispel/io/odom_job.hpp"
+
+namespace dispel::apps {
+
+int run_slam(const SlamCommandOptions& o) {
+  slam::SlamResult r;
+  try {
+    r = slam::run_icp_slam_full(o.job);
+    if (!o.odom_csv.empty()) io::write_trajectory_csv(o.odom_csv, r.odometry);
+    io::write_trajectory_csv(o.output, r.trajectory);
+  } catch (const std::exception& e) {
+    std::cerr << "dispel slam: " << e.what() << "\n";
+    return 1;
+  }
+  if (o.json) {
+    nlohmann::ordered_json j;
+    j["scan_topic"] = r.scan_topic;
+    j["scans"] = r.scans;
+    j["scans_used"] = r.scans_used;
+    j["scans_no_odometry"] = r.scans_no_odometry;
+    j["scans_bad"] = r.scans_bad;
+    j["beams_invalid"] = r.beams_invalid;
+    j["odometry_refused"] = r.odometry_refused;
+    j["map_points"] = r.map_points.size();
+    const eval::TrajectoryPoint& last = r.trajectory.back();
+    j["final"] = {{"t", last.t_s}, {"x", last.x_m}, {"y", last.y_m}, {"yaw", last.yaw_rad}};
+    std::cout << j.dump(2) << std::endl;
+    return 0;
+  }
+  const eval::TrajectoryPoint& last = r.trajectory.back();
+  std::printf(
+      "dispel slam (MRPT ICP-SLAM on %s): %lld of %lld scans used (%lld without odometry, %lld "
+      "unusable), %lld beams invalid; %zu map points; final pose x %.3f m, y %.3f m, yaw %.4f "
+      "rad\nwrote %s (%zu rows)\n",
+      r.scan_topic.c_str(), static_cast<long long>(r.scans_used), static_cast<long long>(r.scans),
+      static_cast<long long>(r.scans_no_odometry), static_cast<long long>(r.scans_bad),
+      static_cast<long long>(r.beams_invalid), r.map_points.size(), last.x_m, last.y_m,
+      last.yaw_rad, o.output.c_str(), r.trajectory.size());
+  return 0;
+}
+
+}  // namespace dispel::apps
+
+namespace dispel::apps {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+
+nlohmann::ordered_json statistic_json(const slam::Statistic& s) {
+  return {{"mean", s.mean}, {"std", s.std}, {"median", s.median}};
+}
+
+nlohmann::ordered_json summary_json(const slam::ExperimentResult& r,
+                                    const std::vector<slam::VariantSummary>& summary,
+                                    const slam::ExperimentOptions& o) {
+  nlohmann::ordered_json j;
+  j["scenario"] = r.scenario_name;
+  j["seeds"] = r.seeds;
+  j["duration_s"] = r.duration_s;
+  j["range_limit_m"] = r.range_limit_m;
+  j["divergence"] = {{"max_position_error_m", o.divergence_position_m},
+                     {"max_yaw_error_rad", o.divergence_yaw_rad}};
+  nlohmann::ordered_json variants = nlohmann::ordered_json::object();
+  nlohmann::ordered_json reference = nlohmann::ordered_json::object();
+  nlohmann::ordered_json thesis = nlohmann::ordered_json::object();
+  for (const slam::VariantSummary& s : summary) {
+    nlohmann::ordered_json v;
+    v["runs"] = s.runs;
+    v["rmse_position_m"] = statistic_json(s.rmse_position_m);
+    v["rmse_x_m"] = statistic_json(s.rmse_x_m);
+    v["rmse_y_m"] = statistic_json(s.rmse_y_m);
+    v["rmse_yaw_rad"] = statistic_json(s.rmse_yaw_rad);
+    v["max_position_error_m"] = statistic_json(s.max_position_error_m);
+    v["diverged"] = s.diverged;
+    if (s.variant == slam::Variant::kFilteredPoi || s.variant == slam::Variant::kFilteredPog) {
+      v["preservation_rate"] = statistic_json(s.preservation_rate);
+      v["rejection_rate"] = statistic_json(s.rejection_rate);
+    }
+    const char* name = slam::variant_name(s.variant);
+    if (s.variant == slam::Variant::kFullRange || s.variant == slam::Variant::kOdometry) {
+      reference[name] = v;
+    } else {
+      variants[name] = v;
+      thesis[name] = {{"rmse_x_m", statistic_json(s.full_range_rmse_x_m)},
+                      {"rmse_y_m", statistic_json(s.full_range_rmse_y_m)},
+                      {"rmse_yaw_rad", statistic_json(s.full_range_rmse_yaw_rad)}};
+    }
+  }
+  j["variants"] = variants;
+  j["reference"] = reference;
+  j["against_full_range"] = thesis;
+  return j;
+}
+
+// runs.csv, summary.json and every trajectory, each written whole or not at all.
+void write_outputs(const std::string& dir, const slam::ExperimentResult& r,
+                   const nlohmann::ordered_json& summary) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(fs::path(dir) / "trajectories", ec);
+  if (ec) throw io::JobError(dir + ": cannot create the directory (" + ec.message() + ")");
+  {
+    io::AtomicFile file((fs::path(dir) / "runs.csv").string());
+    std::FILE* f = std::fopen(file.temp_path().c_str(), "w");
+    if (f == nullptr) throw io::JobError(dir + "/runs.csv: cannot write the file");
+    std::fprintf(f,
+                 "seed,variant,rmse_position_m,rmse_x_m,rmse_y_m,rmse_yaw_rad,"
+                 "max_position_error_m,max_yaw_error_rad,final_position_error_m,diverged,"
+                 "full_range_rmse_x_m,full_range_rmse_y_m,full_range_rmse_yaw_rad,"
+                 "preservation_rate,rejection_rate\n");
+    for (const slam::ExperimentRun& run : r.runs) {
+      const eval::TrajectoryErrors& e = run.against_truth;
+      std::fprintf(f, "%llu,%s,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,",
+                   static_cast<unsigned long long>(run.seed), slam::variant_name(run.variant),
+                   e.rmse_position_m, e.rmse_x_m, e.rmse_y_m, e.rmse_yaw_rad,
+                   e.max_position_error_m, e.max_yaw_error_rad, e.final_position_error_m,
+                   run.diverged ? 1 : 0);
+      if (run.against_full_range) {
+        std::fprintf(f, "%.6f,%.6f,%.6f,", run.against_full_range->rmse_x_m,
+                     run.against_full_range->rmse_y_m, run.against_full_range->rmse_yaw_rad);
+      } else {
+        std::fprintf(f, ",,,");
+      }
+      if (std::isfinite(run.preservation_rate)) {
+        std::fprintf(f, "%.6f,%.6f\n", run.preservation_rate, run.rejection_rate);
+      } else {
+        std::fprintf(f, ",\n");
+      }
+    }
+    const bool ok = std::fflush(f) == 0 && std::ferror(f) == 0;
+    std::fclose(f);
+    if (!ok) throw io::JobError(dir + "/runs.csv: writing failed");
+    file.commit();
+  }
+  {
+    io::AtomicFile file((fs::path(dir) / "summary.json").string());
+    std::ofstream out(file.temp_path());
+    out << summary.dump(2) << "\n";
+    out.close();
+    if (!out) throw io::JobError(dir + "/summary.json: writing failed");
+    file.commit();
+  }
+  for (std::size_t k = 0; k < r.seeds.size(); ++k) {
+    const std::string prefix =
+        (fs::path(dir) / "trajectories" / ("seed_" + std::to_string(r.seeds[k]) + "_")).string();
+    io::write_trajectory_csv(prefix + "truth.csv", r.truth[k]);
+  }
+  for (const slam::ExperimentRun& run : r.runs) {
+    io::write_trajectory_csv(
+        (fs::path(dir) / "trajectories" /
+         ("seed_" + std::to_string(run.seed) + "_" + slam::variant_name(run.variant) + ".csv"))
+            .string(),
+        run.trajectory);
+  }
+}
+
+std::string mean_std(const slam::Statistic& s, double scale, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f ± %.*f", decimals, s.mean * scale, decimals, s.std * scale);
+  return buf;
+}
+
+void print_tables(const slam::ExperimentResult& r, const std::vector<slam::VariantSummary>& summary,
+                  const slam::ExperimentOptions& o) {
+  std::printf(
+      "\n%s, %zu seeds, %.0f s each, range cut to %.1f m; RMSE against the true pose, mean ± std "
+      "over seeds\ndiverged: the position error ever above %.2f m or the yaw error above %.1f "
+      "deg\n\n",
+      r.scenario_name.c_str(), r.seeds.size(), r.duration_s, r.range_limit_m,
+      o.divergence_position_m, o.divergence_yaw_rad * kRadToDeg);
+  std::printf("%-13s %-17s %-17s %-17s %-15s %-17s %s\n", "variant", "position (m)", "x (m)",
+              "y (m)", "yaw (deg)", "largest (m)", "diverged");
+  for (const slam::VariantSummary& s : summary) {
+    std::printf("%-13s %-17s %-17s %-17s %-15s %-17s %d of %d\n", slam::variant_name(s.variant),
+                mean_std(s.rmse_position_m, 1.0, 3).c_str(), mean_std(s.rmse_x_m, 1.0, 3).c_str(),
+                mean_std(s.rmse_y_m, 1.0, 3).c_str(),
+                mean_std(s.rmse_yaw_rad, kRadToDeg, 2).c_str(),
+                mean_std(s.max_position_error_m, 1.0, 3).c_str(), s.diverged, s.runs);
+  }
+  std::printf("\nThe thesis's protocol (its Table 4.1): RMSE against the full-range SLAM run\n\n");
+  std::printf("%-13s %-17s %-17s %-15s\n", "variant", "x (m)", "y (m)", "yaw (deg)");
+  for (const slam::VariantSummary& s : summary) {
+    if (s.variant == slam::Variant::kFullRange || s.variant == slam::Variant::kOdometry) continue;
+    std::printf("%-13s %-17s %-17s %-15s\n", slam::variant_name(s.variant),
+                mean_std(s.full_range_rmse_x_m, 1.0, 3).c_str(),
+                mean_std(s.full_range_rmse_y_m, 1.0, 3).c_str(),
+                mean_std(s.full_range_rmse_yaw_rad, kRadToDeg, 2).c_str());
+  }
+  for (const slam::VariantSummary& s : summary) {
+    if (s.variant != slam::Variant::kFilteredPoi && s.variant != slam::Variant::kFilteredPog) {
+      continue;
+    }
+    std::printf("\n%s: the filter kept %.4f of the static beams and removed %.4f of the moving",
+                slam::variant_name(s.variant), s.preservation_rate.mean, s.rejection_rate.mean);
+  }
+  std::printf("\n");
+}
+
+}  // namespace
+
+int run_experiment(const ExperimentCommandOptions& options) {
+  namespace fs = std::filesystem;
+  slam::ExperimentOptions o = options.job;
+  std::string temp_dir;
+  if (!options.out_dir.empty()) {
+    o.work_dir = (fs::path(options.out_dir) / "bags").string();
+  } else {
+    std::string pattern = (fs::temp_directory_path() / "dispel-experiment-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr) {
+      std::cerr << "dispel experiment: cannot create a temporary directory\n";
+      return 1;
+    }
+    temp_dir = o.work_dir = pattern;
+  }
+  int status = 0;
+  try {
+    const slam::ExperimentResult r = slam::run_experiment(o, [&](const slam::ExperimentRun& run) {
+      if (options.json) return;
+      std::fprintf(stderr, "seed %llu %-13s RMSE %.3f m, %.2f deg%s\n",
+                   static_cast<unsigned long long>(run.seed), slam::variant_name(run.variant),
+                   run.against_truth.rmse_position_m, run.against_truth.rmse_yaw_rad * kRadToDeg,
+                   run.diverged ? " (diverged)" : "");
+    });
+    const std::vector<slam::VariantSummary> summary = slam::summarise(r);
+    const nlohmann::ordered_json j = summary_json(r, summary, o);
+    if (!options.out_dir.empty()) write_outputs(options.out_dir, r, j);
+    if (options.json) {
+      std::cout << j.dump(2) << std::endl;
+    } else {
+      print_tables(r, summary, o);
+      if (!options.out_dir.empty()) {
+        std::printf("wrote %s/runs.csv, summary.json, trajectories/\n", options.out_dir.c_str());
+      }
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "dispel experiment: " << e.what() << "\n";
+    status = 1;
+  }
+  if (!temp_dir.empty()) {
+    std::error_code ignored;
+    fs::remove_all(temp_dir, ignored);
+  } else if (!options.job.keep_bags && !options.out_dir.empty()) {
+    std::error_code ignored;
+    fs::remove(fs::path(options.out_dir) / "bags", ignored);  // Only when empty.
+  }
+  return status;
+}
+
+}  // namespace dispel::apps

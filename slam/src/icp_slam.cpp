@@ -3,28 +3,21 @@
 
 #include "dispel/slam/icp_slam.hpp"
 
-#include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
-#include <rosbag/view.h>
-#include <sensor_msgs/LaserScan.h>
-#include <sys/stat.h>
-#include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <utility>
 
+#include "bag_input.hpp"
 #include "dispel/core/pose_buffer.hpp"
-#include "dispel/io/bag_topics.hpp"
 #include "dispel/io/filter_job.hpp"
-#include "dispel/io/frame_tree.hpp"
-#include "dispel/io/ros_convert.hpp"
 
 namespace dispel::slam {
 namespace {
@@ -159,12 +152,6 @@ bool is_bool(const std::string& s) {
   return l == "true" || l == "false" || l == "0" || l == "1" || l == "yes" || l == "no";
 }
 
-void check_input_file(const std::string& path) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) throw JobError(path + ": " + std::strerror(errno));
-  if (!S_ISREG(st.st_mode)) throw JobError(path + ": not a regular file");
-}
-
 eval::TrajectoryPoint point(double t, const Pose2& p) { return {t, p.x_m, p.y_m, p.yaw_rad}; }
 
 }  // namespace
@@ -175,7 +162,7 @@ std::string engine_config(const std::optional<std::string>& ini_path) {
   std::istringstream defaults_text(kDefaultConfig);
   Ini merged = parse_ini(defaults_text, "defaults");
   if (ini_path) {
-    check_input_file(*ini_path);
+    detail::check_input_file(*ini_path);
     std::ifstream file(*ini_path);
     if (!file) throw JobError(*ini_path + ": cannot read");
     const Ini user = parse_ini(file, *ini_path);
@@ -207,118 +194,46 @@ std::string engine_config(const std::optional<std::string>& ini_path) {
 }
 
 SlamResult run_icp_slam_full(const SlamOptions& options) {
-  check_input_file(options.input);
+  detail::check_input_file(options.input);
+  if (!(options.map_resolution_m > 0.0) || !std::isfinite(options.map_resolution_m)) {
+    throw JobError("map_resolution_m = " + std::to_string(options.map_resolution_m) +
+                   ": must be a positive number of metres per cell");
+  }
   SlamResult result;
   result.engine_config = engine_config(options.engine_config_ini);
   IcpSlamEngine engine(result.engine_config);
 
   rosbag::Bag in;
-  io::open_bag_for_reading(in, options.input);
-  const io::BagTopics topics(in);
+  const detail::BagMotion motion = detail::read_odometry_and_mount(
+      in, options.input, options.scan_topic, options.odom_topic, options.odom_tolerance_s);
+  result.odometry_refused = motion.odometry_refused;
+  result.scan_topic = motion.scan_topic;
   SlamOptions o = options;
-  if (o.scan_topic.empty()) {
-    // What `dispel filter` writes, when it is there.
-    o.scan_topic =
-        topics.has("/scan_filtered", "sensor_msgs/LaserScan") ? "/scan_filtered" : "/scan";
-  }
-  result.scan_topic = o.scan_topic;
-  if (!topics.has(o.scan_topic, "sensor_msgs/LaserScan")) {
-    throw JobError(o.input + ": no sensor_msgs/LaserScan topic " + o.scan_topic +
-                   " (LaserScan topics: " + topics.list("sensor_msgs/LaserScan") + ")");
-  }
-  if (!topics.has(o.odom_topic, "nav_msgs/Odometry")) {
-    throw JobError(o.input + ": no nav_msgs/Odometry topic " + o.odom_topic +
-                   " (Odometry topics: " + topics.list("nav_msgs/Odometry") + ")");
-  }
+  o.scan_topic = motion.scan_topic;
 
-  // First pass: odometry, the laser mount, the laser's frame.
-  PoseBuffer odometry(o.odom_tolerance_s, 0.5);
-  io::FrameTree mounts;
-  std::string base_frame = "base_link";
-  std::string odom_frame = "odom";
-  std::string laser_frame;
-  bool have_laser_frame = false;
-  try {
-    rosbag::View view(in, rosbag::TopicQuery({o.scan_topic, o.odom_topic, "/tf", "/tf_static"}));
-    bool have_odom_frames = false;
-    for (const rosbag::MessageInstance& m : view) {
-      if (m.getTopic() == o.scan_topic) {
-        if (have_laser_frame) continue;
-        if (const auto scan = m.instantiate<sensor_msgs::LaserScan>()) {
-          laser_frame = io::FrameTree::normalise(scan->header.frame_id);
-          have_laser_frame = true;
-        }
-      } else if (m.getTopic() == o.odom_topic) {
-        const auto odom = m.instantiate<nav_msgs::Odometry>();
-        if (!odom) continue;
-        if (!have_odom_frames) {
-          if (!odom->child_frame_id.empty())
-            base_frame = io::FrameTree::normalise(odom->child_frame_id);
-          if (!odom->header.frame_id.empty())
-            odom_frame = io::FrameTree::normalise(odom->header.frame_id);
-          have_odom_frames = true;
-        }
-        if (!odometry.add(io::to_seconds(odom->header.stamp), io::from_ros(odom->pose.pose))) {
-          ++result.odometry_refused;
-        }
-      } else if (const auto tf = m.instantiate<tf2_msgs::TFMessage>()) {
-        for (const auto& t : tf->transforms) {
-          const std::string parent = io::FrameTree::normalise(t.header.frame_id);
-          const std::string child = io::FrameTree::normalise(t.child_frame_id);
-          // Only fixed mounts: not the robot's motion in odom or map.
-          if (parent == odom_frame || child == odom_frame || parent == "map" || child == "map") {
-            continue;
-          }
-          mounts.set(parent, child, io::from_ros(t.transform));
-        }
-      }
+  detail::for_each_scan(in, o.input, o.scan_topic, [&](const LaserScan& scan) {
+    ++result.scans;
+    Pose2 odom_pose;
+    if (motion.odometry.lookup(scan.stamp_s, odom_pose) != PoseLookup::kOk) {
+      ++result.scans_no_odometry;
+      return;
     }
-  } catch (...) {
-    io::rethrow_as_recording_error(o.input);
-  }
-  if (!have_laser_frame) throw JobError(o.input + ": no scans on " + o.scan_topic);
-  if (odometry.empty()) throw JobError(o.input + ": no usable odometry on " + o.odom_topic);
-  Pose2 mount;
-  if (!laser_frame.empty() && laser_frame != base_frame) {
-    const auto found = mounts.lookup(base_frame, laser_frame);
-    if (!found) {
-      throw JobError(o.input + ": no transform from " + base_frame + " to " + laser_frame +
-                     " in /tf_static or /tf; record the sensor mount");
+    const std::optional<Pose2> estimate =
+        engine.process(scan, odom_pose, motion.mount, &result.beams_invalid);
+    if (!estimate) {
+      ++result.scans_bad;
+      return;
     }
-    mount = *found;
-  }
-
-  // Second pass: the scans, in order.
-  try {
-    rosbag::View view(in, rosbag::TopicQuery(o.scan_topic));
-    for (const rosbag::MessageInstance& m : view) {
-      const auto msg = m.instantiate<sensor_msgs::LaserScan>();
-      if (!msg) continue;
-      ++result.scans;
-      const LaserScan scan = io::from_ros(*msg);
-      Pose2 odom_pose;
-      if (odometry.lookup(scan.stamp_s, odom_pose) != PoseLookup::kOk) {
-        ++result.scans_no_odometry;
-        continue;
-      }
-      const std::optional<Pose2> estimate =
-          engine.process(scan, odom_pose, mount, &result.beams_invalid);
-      if (!estimate) {
-        ++result.scans_bad;
-        continue;
-      }
-      ++result.scans_used;
-      result.trajectory.push_back(point(scan.stamp_s, *estimate));
-      result.odometry.push_back(point(scan.stamp_s, odom_pose));
-    }
-  } catch (...) {
-    io::rethrow_as_recording_error(o.input);
-  }
+    ++result.scans_used;
+    result.trajectory.push_back(point(scan.stamp_s, *estimate));
+    result.odometry.push_back(point(scan.stamp_s, odom_pose));
+  });
   if (result.scans_used == 0) {
     throw JobError(o.input + ": no scan on " + o.scan_topic + " has odometry on " + o.odom_topic +
                    " at its stamp");
   }
   result.map_points = engine.map_points();
+  result.grid = engine.grid_map(o.map_resolution_m);
   return result;
 }
 

@@ -6,9 +6,7 @@
 #include <mrpt/maps/CMultiMetricMap.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CPointsMap.h>
-#include <mrpt/obs/CActionCollection.h>
-#include <mrpt/obs/CActionRobotMovement2D.h>
-#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/poses/CPose3D.h>
@@ -21,23 +19,12 @@
 
 #include "dispel/io/filter_job.hpp"
 #include "dispel/slam/icp_slam.hpp"
+#include "mrpt_convert.hpp"
 
 namespace dispel::slam {
 namespace {
 
-// MRPT's exceptions carry a call stack over many lines: keep the first line with text.
-std::string first_line(const std::exception& e) {
-  const std::string s = e.what();
-  std::size_t start = 0;
-  while (start < s.size()) {
-    std::size_t end = s.find('\n', start);
-    if (end == std::string::npos) end = s.size();
-    const std::string line = s.substr(start, end - start);
-    if (line.find_first_not_of(" \t\r") != std::string::npos) return line;
-    start = end + 1;
-  }
-  return "unknown error";
-}
+using detail::first_line;
 
 bool finite_non_negative(double v) { return std::isfinite(v) && v >= 0.0; }
 
@@ -91,46 +78,9 @@ IcpSlamEngine::~IcpSlamEngine() = default;
 
 std::optional<Pose2> IcpSlamEngine::process(const LaserScan& scan, const Pose2& odometry,
                                             const Pose2& mount, std::int64_t* invalid_beams) {
-  const std::size_t n = scan.size();
-  if (n < 2 || !(scan.angle_increment_rad > 0.0) || !std::isfinite(scan.angle_min_rad) ||
-      !std::isfinite(scan.stamp_s)) {
-    return std::nullopt;
-  }
+  const auto obs = detail::to_mrpt_scan(scan, mount, invalid_beams);
+  if (!obs) return std::nullopt;
   Impl& m = *impl_;
-
-  // MRPT's beams are spread evenly over `aperture`, symmetric about the sensor's x axis: beam i
-  // is at -aperture/2 + i * aperture / (n - 1). A ROS scan need not be symmetric, so its centre
-  // bearing goes into the sensor pose.
-  const double aperture = scan.angle_increment_rad * static_cast<double>(n - 1);
-  const double centre = scan.angle_min_rad + 0.5 * aperture;
-  float max_range = scan.range_max_m;
-  if (!std::isfinite(max_range)) {
-    max_range = 0.0F;
-    for (const float r : scan.ranges_m) {
-      if (std::isfinite(r)) max_range = std::max(max_range, r);
-    }
-    max_range = max_range > 0.0F ? 1.01F * max_range : 100.0F;
-  }
-  auto obs = mrpt::obs::CObservation2DRangeScan::Create();
-  obs->timestamp = mrpt::Clock::fromDouble(scan.stamp_s);
-  obs->sensorLabel = "LIDAR";
-  obs->aperture = static_cast<float>(aperture);
-  obs->rightToLeft = true;
-  obs->maxRange = max_range;
-  obs->sensorPose =
-      mrpt::poses::CPose3D(mount.x_m, mount.y_m, 0.0, wrap_angle(mount.yaw_rad + centre), 0.0, 0.0);
-  obs->resizeScan(n);
-  std::int64_t invalid = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const float r = scan.ranges_m[i];
-    // REP 117: NaN is an invalid measurement (and what `dispel filter` writes for removed beams),
-    // +inf no return. A return at range_max is taken as no return too.
-    const bool valid = std::isfinite(r) && r > 0.0F && r >= scan.range_min_m && r < max_range;
-    obs->setScanRange(i, valid ? r : max_range);
-    obs->setScanRangeValidity(i, valid);
-    invalid += valid ? 0 : 1;
-  }
-  if (invalid_beams != nullptr) *invalid_beams += invalid;
 
   Pose2 increment;
   if (!m.started) {
@@ -141,13 +91,8 @@ std::optional<Pose2> IcpSlamEngine::process(const LaserScan& scan, const Pose2& 
   }
   m.last_odometry = odometry;
 
-  mrpt::obs::CActionRobotMovement2D action;
-  action.timestamp = obs->timestamp;
-  mrpt::obs::CActionRobotMovement2D::TMotionModelOptions motion;  // Gaussian model.
-  action.computeFromOdometry(mrpt::poses::CPose2D(increment.x_m, increment.y_m, increment.yaw_rad),
-                             motion);
-  mrpt::obs::CActionCollection actions;
-  actions.insert(action);
+  mrpt::obs::CActionCollection actions =
+      detail::odometry_action(increment, obs->timestamp);  // Gaussian model.
   mrpt::obs::CSensoryFrame frame;
   frame.insert(obs);
 
@@ -174,6 +119,31 @@ std::vector<MapPoint> IcpSlamEngine::map_points() const {
     out.push_back({p.x(), p.y()});
   }
   return out;
+}
+
+GridMap IcpSlamEngine::grid_map(double resolution_m) const {
+  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m)) {
+    throw io::JobError("map resolution " + std::to_string(resolution_m) +
+                       " m: must be a positive number of metres per cell");
+  }
+  const auto res = static_cast<float>(resolution_m);
+  mrpt::maps::COccupancyGridMap2D grid(-1.0F, 1.0F, -1.0F, 1.0F, res);
+  // Removed beams must never clear cells.
+  grid.insertionOptions.considerInvalidRangesAsFreeSpace = false;
+  mrpt::maps::CSimpleMap keyframes;
+  impl_->builder.getCurrentlyBuiltMap(keyframes);
+  for (const auto& keyframe : keyframes) {
+    if (!keyframe.pose || !keyframe.sf) continue;
+    const mrpt::poses::CPose3D p = keyframe.pose->getMeanVal();
+    const Pose2 robot = impl_->first_odometry * Pose2{p.x(), p.y(), p.yaw()};
+    const mrpt::poses::CPose3D pose(robot.x_m, robot.y_m, 0.0, robot.yaw_rad, 0.0, 0.0);
+    for (const auto& obs : *keyframe.sf) {
+      if (const auto* scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(obs.get())) {
+        detail::insert_into_grid(*scan, pose, grid);
+      }
+    }
+  }
+  return detail::from_mrpt_grid(grid, resolution_m, 2);
 }
 
 }  // namespace dispel::slam

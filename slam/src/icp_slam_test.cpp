@@ -1,23 +1,15 @@
 #include "dispel/slam/icp_slam.hpp"
 
-#include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
-#include <nav_msgs/Odometry.h>
-#include <rosbag/bag.h>
-#include <sensor_msgs/LaserScan.h>
-#include <tf2_msgs/TFMessage.h>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <limits>
-#include <random>
 
 #include "dispel/eval/trajectory_error.hpp"
 #include "dispel/io/filter_job.hpp"
-#include "dispel/io/ros_convert.hpp"
-#include "dispel/sim/raycast.hpp"
+#include "room_bag.hpp"
 #include "test_files.hpp"
 
 namespace dispel::slam {
@@ -26,97 +18,10 @@ namespace {
 using io::JobError;
 using test::temp_path;
 
-constexpr double kDeg = kPi / 180.0;
-
-// The scene: a room of 8 x 6 m (walls 0-3: bottom, right, top, left) with two pillars, the robot
-// driving a circle of radius 1.8 m about the room's centre at 0.4 m/s, one loop and a bit (32 s).
-constexpr double kRadius = 1.8;
-constexpr double kSpeed = 0.4;
-constexpr double kDuration = 32.0;
-constexpr double kStart = 100.0;
-constexpr int kTopWall = 2;
-const Pose2 kMount{0.2, 0.05, 0.05};
-
-sim::World room() {
-  sim::World w;
-  w.segments = {{{0, 0}, {8, 0}}, {{8, 0}, {8, 6}}, {{8, 6}, {0, 6}}, {{0, 6}, {0, 0}}};
-  w.circles = {{{1.2, 4.8}, 0.25}, {{6.5, 1.5}, 0.2}};
-  return w;
-}
-
-Pose2 truth_at(double t) {
-  const double w = kSpeed / kRadius;
-  const double a = w * t;
-  return {4.0 + kRadius * std::sin(a), 3.0 - kRadius * std::cos(a), wrap_angle(a)};
-}
-
-struct BagOptions {
-  bool nan_top_wall = false;  // Beams that hit the top wall become NaN, as `dispel filter` does.
-  bool with_odometry = true;
-  bool with_scans = true;
-  double angle_min_deg = -135.0;  // 360 beams, 0.75 deg apart from here (symmetric by default).
-};
-
-struct SimRun {
-  std::string path;
-  std::vector<eval::TrajectoryPoint> truth;  // Base frame at each scan.
-};
-
-// Odometry at 50 Hz with a 2% scale error and a yaw-rate bias of 0.02 rad/s (1.15 deg/s), starting
-// at the true pose; scans at 10 Hz, 360 beams over 270 deg, 1 cm noise; the mount on /tf_static.
-SimRun write_bag(const std::string& name, const BagOptions& opt) {
-  SimRun run;
-  run.path = temp_path(name);
-  rosbag::Bag bag(run.path, rosbag::bagmode::Write);
-  {
-    tf2_msgs::TFMessage tf;
-    geometry_msgs::TransformStamped t;
-    t.header.stamp = io::to_ros_time(kStart);
-    t.header.frame_id = "base_link";
-    t.child_frame_id = "laser";
-    t.transform.translation.x = kMount.x_m;
-    t.transform.translation.y = kMount.y_m;
-    t.transform.rotation = io::quaternion_from_yaw(kMount.yaw_rad);
-    tf.transforms = {t};
-    bag.write("/tf_static", t.header.stamp, tf);
-  }
-  const sim::World world = room();
-  const sim::ScanGeometry g{opt.angle_min_deg * kDeg, 270.0 * kDeg / 359.0, 360, 0.05F, 20.0F};
-  std::mt19937 rng(7);
-  std::normal_distribution<float> noise(0.0F, 0.01F);
-  constexpr double kOdomDt = 0.02;
-  Pose2 odom = truth_at(0.0);
-  Pose2 previous_truth = odom;
-  const int steps = static_cast<int>(std::lround(kDuration / kOdomDt));
-  for (int k = 0; k <= steps; ++k) {
-    const double t = kOdomDt * k;
-    const Pose2 truth = truth_at(t);
-    if (k > 0) {
-      const Pose2 step = previous_truth.inverse() * truth;
-      odom = odom * Pose2{1.02 * step.x_m, 1.02 * step.y_m, step.yaw_rad + 0.02 * kOdomDt};
-    }
-    previous_truth = truth;
-    if (opt.with_odometry) {
-      const nav_msgs::Odometry msg = io::to_ros_odometry(kStart + t, "odom", "base_link", odom,
-                                                         1.02 * kSpeed, kSpeed / kRadius + 0.02);
-      bag.write("/odom", msg.header.stamp, msg);
-    }
-    if (k % 5 != 0 || !opt.with_scans) continue;
-    std::vector<std::int32_t> hit;
-    LaserScan scan = sim::raycast(world, truth * kMount, g, &hit);
-    scan.stamp_s = kStart + t;
-    for (std::size_t i = 0; i < scan.size(); ++i) {
-      if (std::isfinite(scan.ranges_m[i])) scan.ranges_m[i] += noise(rng);
-      if (opt.nan_top_wall && hit[i] == kTopWall) {
-        scan.ranges_m[i] = std::numeric_limits<float>::quiet_NaN();
-      }
-    }
-    const sensor_msgs::LaserScan msg = io::to_ros(scan, "laser");
-    bag.write("/scan", msg.header.stamp, msg);
-    run.truth.push_back({kStart + t, truth.x_m, truth.y_m, truth.yaw_rad});
-  }
-  return run;
-}
+using room::BagOptions;
+using room::kDeg;
+using room::SimRun;
+using room::write_bag;
 
 // Map points more than 0.2 m outside the room: an invalid beam inserted at its stand-in range (the
 // maximum range) would land there.
@@ -232,6 +137,104 @@ TEST(SlamIcp, EngineConfigOverridesDefaults) {
   std::remove(ini.c_str());
 }
 
+// The occupied cells of @p g within 0.15 m of one of the room's walls (0-3: bottom, right, top,
+// left), away from the corners, and the line fitted through their centres.
+struct WallFit {
+  std::int64_t cells = 0;
+  double offset_m = 0.0;   // Mean distance across the wall (its x or y).
+  double angle_rad = 0.0;  // Of the fitted line against the wall.
+};
+
+WallFit fit_wall(const GridMap& g, int wall) {
+  const bool horizontal = wall == 0 || wall == 2;
+  const double at = wall == 0 ? 0.0 : wall == 1 ? 8.0 : wall == 2 ? 6.0 : 0.0;
+  double sa = 0.0, sb = 0.0, saa = 0.0, sab = 0.0;
+  WallFit fit;
+  for (int row = 0; row < g.height; ++row) {
+    for (int col = 0; col < g.width; ++col) {
+      if (g.at(col, row) != kOccupiedCell) continue;
+      const double x = g.origin.x_m + (col + 0.5) * g.resolution_m;
+      const double y = g.origin.y_m + (row + 0.5) * g.resolution_m;
+      const double along = horizontal ? x : y;
+      const double across = horizontal ? y : x;
+      const double length = horizontal ? 8.0 : 6.0;
+      if (std::abs(across - at) > 0.15 || along < 0.5 || along > length - 0.5) continue;
+      sa += along;
+      sb += across;
+      saa += along * along;
+      sab += along * across;
+      ++fit.cells;
+    }
+  }
+  if (fit.cells < 2) return fit;
+  const double n = static_cast<double>(fit.cells);
+  fit.offset_m = sb / n - at;
+  fit.angle_rad = std::atan((n * sab - sa * sb) / (n * saa - sa * sa));
+  return fit;
+}
+
+// Free cells in a band just below the top wall.
+std::int64_t free_cells_below_top_wall(const GridMap& g) {
+  std::int64_t n = 0;
+  for (int row = 0; row < g.height; ++row) {
+    for (int col = 0; col < g.width; ++col) {
+      const double x = g.origin.x_m + (col + 0.5) * g.resolution_m;
+      const double y = g.origin.y_m + (row + 0.5) * g.resolution_m;
+      n += y > 5.7 && y < 5.9 && x > 1.0 && x < 7.0 && g.at(col, row) == kFreeCell;
+    }
+  }
+  return n;
+}
+
+TEST(SlamIcp, GridMapPutsTheWallsWhereTheyAre) {
+  const SimRun run = write_bag("slam_grid.bag", {});
+  SlamOptions o;
+  o.input = run.path;
+  const SlamResult r = run_icp_slam_full(o);
+  const GridMap& g = r.grid;
+  ASSERT_NO_THROW(g.validate());
+  EXPECT_EQ(g.resolution_m, 0.05);
+  EXPECT_EQ(g.origin.yaw_rad, 0.0);
+  // The room (8 x 6 m) and no more than a few cells around it.
+  EXPECT_LE(g.origin.x_m, -0.05);
+  EXPECT_LE(g.origin.y_m, -0.05);
+  EXPECT_GE(g.origin.x_m + g.width * g.resolution_m, 8.05);
+  EXPECT_GE(g.origin.y_m + g.height * g.resolution_m, 6.05);
+  EXPECT_LT(g.width * g.resolution_m, 9.0);
+  EXPECT_LT(g.height * g.resolution_m, 7.0);
+  std::printf("grid %d x %d cells, %lld occupied, %lld free, %lld free below the top wall\n",
+              g.width, g.height, static_cast<long long>(g.occupied_cells()),
+              static_cast<long long>(g.free_cells()),
+              static_cast<long long>(free_cells_below_top_wall(g)));
+  for (int wall = 0; wall < 4; ++wall) {
+    const WallFit fit = fit_wall(g, wall);
+    std::printf("wall %d: %lld cells, offset %.4f m, angle %.3f deg\n", wall,
+                static_cast<long long>(fit.cells), fit.offset_m, fit.angle_rad / kDeg);
+    EXPECT_GT(fit.cells, 100) << "wall " << wall;
+    EXPECT_LT(std::abs(fit.offset_m), 0.03) << "wall " << wall;
+    // SLAM's own yaw error is about 0.2 degrees; beams spread over aperture / n instead of
+    // aperture / (n - 1) would add 0.4.
+    EXPECT_LT(std::abs(fit.angle_rad), 0.45 * kDeg) << "wall " << wall;
+  }
+  EXPECT_GT(free_cells_below_top_wall(g), 400);
+  std::remove(run.path.c_str());
+}
+
+TEST(SlamIcp, InvalidBeamsNeitherFillNorClearGridCells) {
+  const SimRun run = write_bag("slam_grid_nan.bag", {true, true, true, -135.0});
+  SlamOptions o;
+  o.input = run.path;
+  const SlamResult r = run_icp_slam_full(o);
+  const WallFit top = fit_wall(r.grid, room::kTopWall);
+  std::printf("NaN top wall: %lld occupied cells on it, %lld free cells below it\n",
+              static_cast<long long>(top.cells),
+              static_cast<long long>(free_cells_below_top_wall(r.grid)));
+  EXPECT_EQ(top.cells, 0);
+  EXPECT_LT(free_cells_below_top_wall(r.grid), 100);
+  EXPECT_GT(fit_wall(r.grid, 0).cells, 100);
+  std::remove(run.path.c_str());
+}
+
 // --- Bad input ----------------------------------------------------------------------------------
 
 void expect_error(const SlamOptions& o, const std::string& expected) {
@@ -271,6 +274,17 @@ TEST(SlamIcpBadInput, MissingFileNotABagMissingTopics) {
   o.odom_topic = "/odom";
   expect_error(o, "no sensor_msgs/LaserScan topic /scan");
   std::remove(no_scans.path.c_str());
+}
+
+TEST(SlamIcpBadInput, MapResolutionMustBePositive) {
+  const SimRun run = write_bag("slam_bad_resolution.bag", {false, true, true, -135.0});
+  SlamOptions o;
+  o.input = run.path;
+  o.map_resolution_m = 0.0;
+  expect_error(o, "map_resolution_m = 0");
+  o.map_resolution_m = -0.05;
+  expect_error(o, "must be a positive number of metres per cell");
+  std::remove(run.path.c_str());
 }
 
 TEST(SlamIcpBadInput, BadEngineConfiguration) {

@@ -13,6 +13,7 @@
 #include "dispel/core/laser_scan.hpp"
 #include "dispel/core/pose2.hpp"
 #include "dispel/eval/trajectory_error.hpp"
+#include "dispel/slam/grid_map.hpp"
 
 namespace dispel::slam {
 
@@ -26,6 +27,8 @@ struct SlamOptions {
   std::optional<std::string> engine_config_ini;  ///< MRPT-style .ini over the defaults.
   /// How far beyond the first or last odometry message a scan's odometry may be taken from it.
   double odom_tolerance_s = 0.05;
+  /// Cell edge of SlamResult::grid (m, > 0).
+  double map_resolution_m = 0.05;
 };
 
 /// A point of the engine's final map, in the odometry frame.
@@ -43,6 +46,9 @@ struct SlamResult {
   std::vector<eval::TrajectoryPoint> odometry;
   /// The final points map (the first points map of the engine's multi-metric map).
   std::vector<MapPoint> map_points;
+  /// The occupancy grid of the run, in the odometry frame (see IcpSlamEngine::grid_map()): the
+  /// map to localise in later (write_map_yaml()).
+  GridMap grid;
   std::int64_t scans = 0;              ///< Scans on the topic.
   std::int64_t scans_used = 0;         ///< Scans given to the engine.
   std::int64_t scans_no_odometry = 0;  ///< Skipped: no odometry at their stamp.
@@ -70,7 +76,7 @@ std::string engine_config(const std::optional<std::string>& ini_path);
 /// infinite and out-of-limit beams flagged invalid, so they never enter the map) and given with
 /// the odometry increment since the previous scan (mrpt::obs::CActionRobotMovement2D).
 /// @throws dispel::io::JobError with a one-line message (missing file, not a bag, no scan or
-/// odometry topic, no laser mount, bad engine configuration).
+/// odometry topic, no laser mount, bad engine configuration, map_resolution_m not > 0).
 SlamResult run_icp_slam_full(const SlamOptions& options);
 
 /// The estimated robot trajectory only (see run_icp_slam_full()).
@@ -94,6 +100,13 @@ class IcpSlamEngine {
 
   /// The points of the engine's points map, in the odometry frame.
   std::vector<MapPoint> map_points() const;
+
+  /// An occupancy grid (MRPT's COccupancyGridMap2D, default insertion options) of the keyframe
+  /// scans inserted at the engine's keyframe poses, in the odometry frame, axis-aligned, cropped
+  /// to the observed cells plus 2 cells, quantised as map_saver saves maps (occupied >= 65 %,
+  /// free <= 25 %, otherwise unknown). Invalid beams are not free space: they change no cell.
+  /// @param resolution_m cell edge (m). @throws dispel::io::JobError unless it is > 0.
+  GridMap grid_map(double resolution_m) const;
 
  private:
   struct Impl;

@@ -170,6 +170,23 @@ int main(int argc, char** argv) {
                        "MRPT .ini over the defaults ([MappingApplication], [ICP], ...)");
   slam_cmd->add_option("--odom-csv", slam.odom_csv,
                        "Also write the odometry at the same scans as t,x,y,yaw here");
+  slam_cmd->add_option("--save-map", slam.save_map,
+                       "Also write the map as map_server MAP.yaml + MAP.pgm");
+  std::vector<double> slam_initial_pose;
+  slam_cmd->add_option("--map", slam.map,
+                       "Localise in this map_server MAP.yaml (particle filter) instead of SLAM");
+  slam_cmd
+      ->add_option("--initial-pose", slam_initial_pose,
+                   "With --map: the robot's pose X Y YAW (m, m, rad) in the map at the first "
+                   "scan (default: the odometry pose)")
+      ->expected(3);
+  slam_cmd->add_option("--particles", slam.localization.filter.particles, "With --map: particles")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  slam_cmd
+      ->add_option("--seed", slam.localization.filter.seed,
+                   "With --map: the particle filter's random seed (same seed, same trajectory)")
+      ->capture_default_str();
   slam_cmd->add_flag("--json", slam.json, "Print the counters as JSON");
 
   dispel::apps::ExperimentCommandOptions experiment;
@@ -238,6 +255,14 @@ int main(int argc, char** argv) {
 #ifdef DISPEL_HAVE_SLAM
     if (*slam_cmd) {
       if (!slam_ini.empty()) slam.job.engine_config_ini = slam_ini;
+      if (!slam_initial_pose.empty()) {
+        if (slam.map.empty()) {
+          std::cerr << "dispel slam: --initial-pose needs --map\n";
+          return 1;
+        }
+        slam.localization.initial_pose =
+            dispel::Pose2{slam_initial_pose[0], slam_initial_pose[1], slam_initial_pose[2]};
+      }
       return dispel::apps::run_slam(slam);
     }
     if (*experiment_cmd) {

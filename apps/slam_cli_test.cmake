@@ -52,6 +52,44 @@ run_dispel(rc so se eval-trajectory --truth ${WORK_DIR}/odom.csv --estimate ${WO
            --json)
 expect_ok("dispel eval-trajectory" "${rc}" "${se}")
 
+# The second mode: a map saved by SLAM, then particle-filter localisation in it, twice with one
+# seed (identical), near the odometry of this short run (it drifts by centimetres in 10 s).
+run_dispel(rc so se slam ${WORK_DIR}/sim.bag -o ${WORK_DIR}/slam_raw.csv
+           --save-map ${WORK_DIR}/map.yaml)
+expect_ok("dispel slam --save-map" "${rc}" "${se}")
+if(NOT EXISTS ${WORK_DIR}/map.yaml OR NOT EXISTS ${WORK_DIR}/map.pgm)
+  message(FATAL_ERROR "dispel slam --save-map wrote no map.yaml and map.pgm")
+endif()
+foreach(run a b)
+  run_dispel(rc so se slam ${WORK_DIR}/filtered.bag -o ${WORK_DIR}/loc_${run}.csv
+             --map ${WORK_DIR}/map.yaml --particles 200 --seed 7 --json)
+  expect_ok("dispel slam --map" "${rc}" "${se}")
+endforeach()
+string(JSON mode GET "${so}" mode)
+string(JSON used GET "${so}" scans_used)
+if(NOT mode STREQUAL "localization" OR NOT used EQUAL 201)
+  message(FATAL_ERROR "dispel slam --map: expected localisation over 201 scans: ${so}")
+endif()
+file(READ ${WORK_DIR}/loc_a.csv loc_a)
+file(READ ${WORK_DIR}/loc_b.csv loc_b)
+if(NOT loc_a STREQUAL loc_b)
+  message(FATAL_ERROR "dispel slam --map: two runs with one seed differ")
+endif()
+run_dispel(rc so se eval-trajectory --truth ${WORK_DIR}/odom.csv --estimate ${WORK_DIR}/loc_a.csv
+           --json)
+expect_ok("dispel eval-trajectory (localisation)" "${rc}" "${se}")
+string(JSON rmse GET "${so}" rmse_position_m)
+if(NOT rmse LESS 0.1)
+  message(FATAL_ERROR "dispel slam --map: RMSE ${rmse} m from the odometry of a 10 s run")
+endif()
+run_dispel(rc so se slam ${WORK_DIR}/sim.bag -o ${WORK_DIR}/bad.csv --map ${WORK_DIR}/nomap.yaml)
+expect_error("dispel slam --map missing" "nomap.yaml" "${rc}" "${se}")
+run_dispel(rc so se slam ${WORK_DIR}/sim.bag -o ${WORK_DIR}/bad.csv --map ${WORK_DIR}/map.yaml
+           --save-map ${WORK_DIR}/again.yaml)
+expect_error("dispel slam --map --save-map" "cannot go with --map" "${rc}" "${se}")
+run_dispel(rc so se slam ${WORK_DIR}/sim.bag -o ${WORK_DIR}/bad.csv --initial-pose 0 0 0)
+expect_error("dispel slam --initial-pose without --map" "needs --map" "${rc}" "${se}")
+
 # Bad input: a clear error and no output file.
 run_dispel(rc so se slam ${WORK_DIR}/sim.bag -o ${WORK_DIR}/bad.csv --scan-topic /nope)
 expect_error("dispel slam --scan-topic /nope" "no sensor_msgs/LaserScan topic /nope" "${rc}" "${se}")

@@ -13,21 +13,78 @@
 #include "dispel/io/atomic_file.hpp"
 #include "dispel/io/filter_job.hpp"
 #include "dispel/io/odom_job.hpp"
+#include "dispel/slam/grid_map.hpp"
 
 namespace dispel::apps {
 
-int run_slam(const SlamCommandOptions& o) {
-  slam::SlamResult r;
+namespace {
+
+int run_localization(const SlamCommandOptions& o) {
+  slam::LocalizationResult r;
+  slam::LocalizationOptions l = o.localization;
+  l.input = o.job.input;
+  l.scan_topic = o.job.scan_topic;
+  l.odom_topic = o.job.odom_topic;
+  l.map_yaml = o.map;
   try {
-    r = slam::run_icp_slam_full(o.job);
+    r = slam::run_pf_localization(l);
     if (!o.odom_csv.empty()) io::write_trajectory_csv(o.odom_csv, r.odometry);
     io::write_trajectory_csv(o.output, r.trajectory);
   } catch (const std::exception& e) {
     std::cerr << "dispel slam: " << e.what() << "\n";
     return 1;
   }
+  const eval::TrajectoryPoint& last = r.trajectory.back();
   if (o.json) {
     nlohmann::ordered_json j;
+    j["mode"] = "localization";
+    j["scan_topic"] = r.scan_topic;
+    j["scans"] = r.scans;
+    j["scans_used"] = r.scans_used;
+    j["scans_no_odometry"] = r.scans_no_odometry;
+    j["scans_bad"] = r.scans_bad;
+    j["beams_invalid"] = r.beams_invalid;
+    j["odometry_refused"] = r.odometry_refused;
+    j["final"] = {{"t", last.t_s}, {"x", last.x_m}, {"y", last.y_m}, {"yaw", last.yaw_rad}};
+    j["final_position_std_m"] = r.position_std_m.back();
+    std::cout << j.dump(2) << std::endl;
+    return 0;
+  }
+  std::printf(
+      "dispel slam (MRPT particle-filter localisation in %s, %d particles, seed %llu, on %s): "
+      "%lld of %lld scans used, %lld beams invalid; final pose x %.3f m, y %.3f m, yaw %.4f rad "
+      "(std %.3f m)\nwrote %s (%zu rows)\n",
+      o.map.c_str(), l.filter.particles, static_cast<unsigned long long>(l.filter.seed),
+      r.scan_topic.c_str(), static_cast<long long>(r.scans_used), static_cast<long long>(r.scans),
+      static_cast<long long>(r.beams_invalid), last.x_m, last.y_m, last.yaw_rad,
+      r.position_std_m.back(), o.output.c_str(), r.trajectory.size());
+  return 0;
+}
+
+}  // namespace
+
+int run_slam(const SlamCommandOptions& o) {
+  if (!o.map.empty()) {
+    if (!o.save_map.empty()) {
+      std::cerr << "dispel slam: --save-map builds a map by SLAM; it cannot go with --map\n";
+      return 1;
+    }
+    return run_localization(o);
+  }
+  slam::SlamResult r;
+  try {
+    r = slam::run_icp_slam_full(o.job);
+    if (!o.save_map.empty()) slam::write_map_yaml(r.grid, o.save_map);
+    if (!o.odom_csv.empty()) io::write_trajectory_csv(o.odom_csv, r.odometry);
+    io::write_trajectory_csv(o.output, r.trajectory);
+  } catch (const std::exception& e) {
+    std::cerr << "dispel slam: " << e.what() << "\n";
+    return 1;
+  }
+  const eval::TrajectoryPoint& last = r.trajectory.back();
+  if (o.json) {
+    nlohmann::ordered_json j;
+    j["mode"] = "slam";
     j["scan_topic"] = r.scan_topic;
     j["scans"] = r.scans;
     j["scans_used"] = r.scans_used;
@@ -36,20 +93,19 @@ int run_slam(const SlamCommandOptions& o) {
     j["beams_invalid"] = r.beams_invalid;
     j["odometry_refused"] = r.odometry_refused;
     j["map_points"] = r.map_points.size();
-    const eval::TrajectoryPoint& last = r.trajectory.back();
     j["final"] = {{"t", last.t_s}, {"x", last.x_m}, {"y", last.y_m}, {"yaw", last.yaw_rad}};
     std::cout << j.dump(2) << std::endl;
     return 0;
   }
-  const eval::TrajectoryPoint& last = r.trajectory.back();
   std::printf(
       "dispel slam (MRPT ICP-SLAM on %s): %lld of %lld scans used (%lld without odometry, %lld "
       "unusable), %lld beams invalid; %zu map points; final pose x %.3f m, y %.3f m, yaw %.4f "
-      "rad\nwrote %s (%zu rows)\n",
+      "rad\nwrote %s (%zu rows)%s%s\n",
       r.scan_topic.c_str(), static_cast<long long>(r.scans_used), static_cast<long long>(r.scans),
       static_cast<long long>(r.scans_no_odometry), static_cast<long long>(r.scans_bad),
       static_cast<long long>(r.beams_invalid), r.map_points.size(), last.x_m, last.y_m,
-      last.yaw_rad, o.output.c_str(), r.trajectory.size());
+      last.yaw_rad, o.output.c_str(), r.trajectory.size(), o.save_map.empty() ? "" : ", ",
+      o.save_map.c_str());
   return 0;
 }
 

@@ -81,10 +81,11 @@ LocalizationResult run_pf_localization(const LocalizationOptions& o) {
       detail::read_odometry_and_mount(in, o.input, o.scan_topic, o.odom_topic, o.odom_tolerance_s);
   LocalizationResult result;
   result.odometry_refused = motion.odometry_refused;
+  result.scan_topic = motion.scan_topic;
 
   // Made at the first scan used, where the initial pose holds.
   std::unique_ptr<PfLocalizer> localizer;
-  detail::for_each_scan(in, o.input, o.scan_topic, [&](const LaserScan& scan) {
+  detail::for_each_scan(in, o.input, result.scan_topic, [&](const LaserScan& scan) {
     ++result.scans;
     Pose2 odom_pose;
     if (motion.odometry.lookup(scan.stamp_s, odom_pose) != PoseLookup::kOk) {
@@ -109,8 +110,8 @@ LocalizationResult run_pf_localization(const LocalizationOptions& o) {
     result.yaw_std_rad.push_back(estimate->yaw_std_rad);
   });
   if (result.scans_used == 0) {
-    throw JobError(o.input + ": no scan on " + o.scan_topic + " has odometry on " + o.odom_topic +
-                   " at its stamp");
+    throw JobError(o.input + ": no scan on " + result.scan_topic + " has odometry on " +
+                   o.odom_topic + " at its stamp");
   }
   return result;
 }

@@ -62,8 +62,9 @@ struct ParticleFilterOptions {
 
 /// What to localise, where, and how.
 struct LocalizationOptions {
-  std::string input;                 ///< A ROS 1 bag.
-  std::string scan_topic = "/scan";  ///< sensor_msgs/LaserScan.
+  std::string input;  ///< A ROS 1 bag.
+  /// sensor_msgs/LaserScan. Empty: /scan_filtered when the bag has it, else /scan.
+  std::string scan_topic = "/scan";
   std::string odom_topic = "/odom";  ///< nav_msgs/Odometry: the motion input.
   std::string map_yaml;              ///< A map_server map, read when `map` is not set.
   std::optional<GridMap> map;        ///< The map itself (wins over map_yaml).
@@ -90,6 +91,7 @@ struct LocalizationResult {
   std::int64_t scans_bad = 0;          ///< Skipped: no beams or a non-positive angle increment.
   std::int64_t beams_invalid = 0;      ///< Beams marked invalid (NaN, inf, out of limits).
   std::int64_t odometry_refused = 0;   ///< Odometry messages out of order or not finite.
+  std::string scan_topic;              ///< The scan topic read.
 };
 
 /// Localises the robot of a bag in a known map: every scan with odometry at its stamp is

@@ -11,7 +11,7 @@
 #include "sim_commands.hpp"
 #endif
 #ifdef DISPEL_HAVE_SLAM
-#include "slam_command.hpp"
+#include "slam_cli.hpp"
 #endif
 
 #ifndef DISPEL_VERSION
@@ -153,76 +153,9 @@ int main(int argc, char** argv) {
 #endif
 
 #ifdef DISPEL_HAVE_SLAM
-  dispel::apps::SlamCommandOptions slam;
-  std::string slam_ini;
-  slam.job.scan_topic.clear();
-  CLI::App* slam_cmd = app.add_subcommand(
-      "slam", "Run MRPT's ICP-SLAM over a recording's scans and odometry; write its trajectory");
-  slam_cmd->add_option("input", slam.job.input, "IN.bag (raw, or filtered by dispel filter)")
-      ->required();
-  slam_cmd->add_option("-o,--output", slam.output, "TRAJECTORY.csv to write (t,x,y,yaw)")
-      ->required();
-  slam_cmd->add_option("--scan-topic", slam.job.scan_topic,
-                       "LaserScan topic (default: /scan_filtered if the bag has it, else /scan)");
-  slam_cmd->add_option("--odom-topic", slam.job.odom_topic, "Odometry topic (the motion input)")
-      ->capture_default_str();
-  slam_cmd->add_option("--engine-config", slam_ini,
-                       "MRPT .ini over the defaults ([MappingApplication], [ICP], ...)");
-  slam_cmd->add_option("--odom-csv", slam.odom_csv,
-                       "Also write the odometry at the same scans as t,x,y,yaw here");
-  slam_cmd->add_option("--save-map", slam.save_map,
-                       "Also write the map as map_server MAP.yaml + MAP.pgm");
-  std::vector<double> slam_initial_pose;
-  slam_cmd->add_option("--map", slam.map,
-                       "Localise in this map_server MAP.yaml (particle filter) instead of SLAM");
-  slam_cmd
-      ->add_option("--initial-pose", slam_initial_pose,
-                   "With --map: the robot's pose X Y YAW (m, m, rad) in the map at the first "
-                   "scan (default: the odometry pose)")
-      ->expected(3);
-  slam_cmd->add_option("--particles", slam.localization.filter.particles, "With --map: particles")
-      ->check(CLI::Range(1, 1000000))
-      ->capture_default_str();
-  slam_cmd
-      ->add_option("--seed", slam.localization.filter.seed,
-                   "With --map: the particle filter's random seed (same seed, same trajectory)")
-      ->capture_default_str();
-  slam_cmd->add_flag("--json", slam.json, "Print the counters as JSON");
-
-  dispel::apps::ExperimentCommandOptions experiment;
-  std::string experiment_config, experiment_ini;
-  double experiment_duration = 0.0, experiment_yaw_deg = 10.0;
-  CLI::App* experiment_cmd = app.add_subcommand(
-      "experiment",
-      "Simulate a scenario over many seeds; run SLAM on the raw, filtered and oracle scans and "
-      "compare each with the truth");
-  experiment_cmd->add_option("scenario", experiment.job.scenario, "SCENARIO.yaml")->required();
-  experiment_cmd->add_option("--seeds", experiment.job.seeds, "How many seeds")
-      ->check(CLI::Range(1, 100000))
-      ->capture_default_str();
-  experiment_cmd->add_option("--first-seed", experiment.job.first_seed, "The first seed")
-      ->capture_default_str();
-  CLI::Option* experiment_duration_opt = experiment_cmd->add_option(
-      "--duration", experiment_duration, "Seconds per run (default: the scenario's)");
-  experiment_duration_opt->check(CLI::PositiveNumber);
-  experiment_cmd->add_option("--out", experiment.out_dir,
-                             "Write runs.csv, summary.json and the trajectories here");
-  experiment_cmd->add_flag("--json", experiment.json, "Print the summary as JSON");
-  experiment_cmd->add_option("--config", experiment_config,
-                             "The filter's YAML configuration (default: dispel's defaults)");
-  experiment_cmd->add_option("--engine-config", experiment_ini, "MRPT .ini over the defaults");
-  experiment_cmd
-      ->add_option("--diverged-at", experiment.job.divergence_position_m,
-                   "A run diverged when its position error ever exceeds this (m)")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  experiment_cmd
-      ->add_option("--diverged-at-yaw", experiment_yaw_deg,
-                   "... or its yaw error ever exceeds this (deg)")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  experiment_cmd->add_flag("--keep-bags", experiment.job.keep_bags,
-                           "Keep the bags of each seed under OUT/bags/ (needs --out)");
+  // Defined here for parsing and help; run by dispel-slam (which links MRPT, slow to load).
+  dispel::apps::SlamCli slam;
+  dispel::apps::add_slam_commands(app, slam);
 #endif
 
   try {
@@ -253,29 +186,7 @@ int main(int argc, char** argv) {
     }
 #endif
 #ifdef DISPEL_HAVE_SLAM
-    if (*slam_cmd) {
-      if (!slam_ini.empty()) slam.job.engine_config_ini = slam_ini;
-      if (!slam_initial_pose.empty()) {
-        if (slam.map.empty()) {
-          std::cerr << "dispel slam: --initial-pose needs --map\n";
-          return 1;
-        }
-        slam.localization.initial_pose =
-            dispel::Pose2{slam_initial_pose[0], slam_initial_pose[1], slam_initial_pose[2]};
-      }
-      return dispel::apps::run_slam(slam);
-    }
-    if (*experiment_cmd) {
-      if (!experiment_config.empty()) experiment.job.filter_config = experiment_config;
-      if (!experiment_ini.empty()) experiment.job.engine_config_ini = experiment_ini;
-      if (experiment_duration_opt->count() > 0) experiment.job.duration_s = experiment_duration;
-      experiment.job.divergence_yaw_rad = experiment_yaw_deg * 3.14159265358979323846 / 180.0;
-      if (experiment.job.keep_bags && experiment.out_dir.empty()) {
-        std::cerr << "dispel experiment: --keep-bags needs --out\n";
-        return 1;
-      }
-      return dispel::apps::run_experiment(experiment);
-    }
+    if (dispel::apps::slam_command_chosen(slam)) return dispel::apps::exec_dispel_slam(argc, argv);
 #endif
   } catch (const std::exception& e) {
     std::cerr << "dispel: " << e.what() << "\n";

@@ -317,3 +317,35 @@ int run_experiment(const ExperimentCommandOptions& options) {
 }
 
 }  // namespace dispel::apps
+
+#include "slam_cli.hpp"
+
+namespace dispel::apps {
+
+int run_slam_command(SlamCli& cli) {
+  if (cli.slam_cmd != nullptr && *cli.slam_cmd) {
+    SlamCommandOptions& o = cli.slam;
+    if (!cli.slam_ini.empty()) o.job.engine_config_ini = cli.slam_ini;
+    if (!cli.initial_pose.empty()) {
+      if (o.map.empty()) {
+        std::cerr << "dispel slam: --initial-pose needs --map\n";
+        return 1;
+      }
+      o.localization.initial_pose =
+          Pose2{cli.initial_pose[0], cli.initial_pose[1], cli.initial_pose[2]};
+    }
+    return run_slam(o);
+  }
+  ExperimentCommandOptions& o = cli.experiment;
+  if (!cli.experiment_config.empty()) o.job.filter_config = cli.experiment_config;
+  if (!cli.experiment_ini.empty()) o.job.engine_config_ini = cli.experiment_ini;
+  if (cli.experiment_duration->count() > 0) o.job.duration_s = cli.experiment_duration_s;
+  o.job.divergence_yaw_rad = cli.experiment_yaw_deg * kPi / 180.0;
+  if (o.job.keep_bags && o.out_dir.empty()) {
+    std::cerr << "dispel experiment: --keep-bags needs --out\n";
+    return 1;
+  }
+  return run_experiment(o);
+}
+
+}  // namespace dispel::apps

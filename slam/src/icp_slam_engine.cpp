@@ -28,6 +28,9 @@ using detail::first_line;
 
 bool finite_non_negative(double v) { return std::isfinite(v) && v >= 0.0; }
 
+// Valid beams the first scan given to the engine needs (its map starts from it).
+constexpr std::int64_t kMinBeamsToStart = 30;
+
 }  // namespace
 
 struct IcpSlamEngine::Impl {
@@ -78,9 +81,18 @@ IcpSlamEngine::~IcpSlamEngine() = default;
 
 std::optional<Pose2> IcpSlamEngine::process(const LaserScan& scan, const Pose2& odometry,
                                             const Pose2& mount, std::int64_t* invalid_beams) {
-  const auto obs = detail::to_mrpt_scan(scan, mount, invalid_beams);
+  std::int64_t invalid = 0;
+  const auto obs = detail::to_mrpt_scan(scan, mount, &invalid);
+  if (invalid_beams != nullptr) *invalid_beams += invalid;
   if (!obs) return std::nullopt;
   Impl& m = *impl_;
+
+  // The engine's first scan becomes its map, and MRPT's ICP-SLAM does not recover from an empty
+  // one (no match is ever accepted, so it follows odometry to the end). A filter that removes
+  // every object until it has seen it still (presumption of guilt) gives exactly that: the
+  // engine starts with the first scan that has enough valid beams; until then, odometry.
+  const auto valid = static_cast<std::int64_t>(scan.ranges_m.size()) - invalid;
+  if (!m.started && valid < kMinBeamsToStart) return odometry;
 
   Pose2 increment;
   if (!m.started) {

@@ -59,6 +59,9 @@ struct BagOptions {
   std::uint32_t odom_noise_seed = 1;
   // Odometry starts at (0, 0, 0) as a deployed robot's does, not at the true pose.
   bool odom_from_origin = false;
+  // The first this many scans NaN but for every 40th beam (a filter with presumption of guilt
+  // removes every object it has not yet seen still: the first scans keep a few stray beams).
+  int nan_first_scans = 0;
 };
 
 struct SimRun {
@@ -117,7 +120,8 @@ inline SimRun write_bag(const std::string& name, const BagOptions& opt) {
     scan.stamp_s = kStart + t;
     for (std::size_t i = 0; i < scan.size(); ++i) {
       if (std::isfinite(scan.ranges_m[i])) scan.ranges_m[i] += noise(rng);
-      if (opt.nan_top_wall && hit[i] == kTopWall) {
+      if ((opt.nan_top_wall && hit[i] == kTopWall) ||
+          (static_cast<int>(run.truth.size()) < opt.nan_first_scans && i % 40 != 0)) {
         scan.ranges_m[i] = std::numeric_limits<float>::quiet_NaN();
       }
     }

@@ -95,6 +95,9 @@ class IcpSlamEngine {
   /// the robot; returns the engine's estimate of the robot pose in the odometry frame.
   /// Returns nullopt (and does nothing) for a scan without beams or with a non-positive angle
   /// increment. @p invalid_beams, when given, is increased by the beams flagged invalid.
+  /// The engine starts (its map begins) with the first scan that has at least 30 valid beams;
+  /// before it, the estimate is @p odometry (a filter with presumption of guilt removes every
+  /// object of the first scans, and MRPT's ICP-SLAM never recovers from an empty first map).
   std::optional<Pose2> process(const LaserScan& scan, const Pose2& odometry, const Pose2& mount,
                                std::int64_t* invalid_beams = nullptr);
 

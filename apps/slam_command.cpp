@@ -19,6 +19,23 @@ namespace dispel::apps {
 
 namespace {
 
+// The counters both modes share, and the final pose.
+template <typename Result>
+nlohmann::ordered_json counters_json(const char* mode, const Result& r) {
+  const eval::TrajectoryPoint& last = r.trajectory.back();
+  nlohmann::ordered_json j;
+  j["mode"] = mode;
+  j["scan_topic"] = r.scan_topic;
+  j["scans"] = r.scans;
+  j["scans_used"] = r.scans_used;
+  j["scans_no_odometry"] = r.scans_no_odometry;
+  j["scans_bad"] = r.scans_bad;
+  j["beams_invalid"] = r.beams_invalid;
+  j["odometry_refused"] = r.odometry_refused;
+  j["final"] = {{"t", last.t_s}, {"x", last.x_m}, {"y", last.y_m}, {"yaw", last.yaw_rad}};
+  return j;
+}
+
 int run_localization(const SlamCommandOptions& o) {
   slam::LocalizationResult r;
   slam::LocalizationOptions l = o.localization;
@@ -36,16 +53,7 @@ int run_localization(const SlamCommandOptions& o) {
   }
   const eval::TrajectoryPoint& last = r.trajectory.back();
   if (o.json) {
-    nlohmann::ordered_json j;
-    j["mode"] = "localization";
-    j["scan_topic"] = r.scan_topic;
-    j["scans"] = r.scans;
-    j["scans_used"] = r.scans_used;
-    j["scans_no_odometry"] = r.scans_no_odometry;
-    j["scans_bad"] = r.scans_bad;
-    j["beams_invalid"] = r.beams_invalid;
-    j["odometry_refused"] = r.odometry_refused;
-    j["final"] = {{"t", last.t_s}, {"x", last.x_m}, {"y", last.y_m}, {"yaw", last.yaw_rad}};
+    nlohmann::ordered_json j = counters_json("localization", r);
     j["final_position_std_m"] = r.position_std_m.back();
     std::cout << j.dump(2) << std::endl;
     return 0;
@@ -83,17 +91,8 @@ int run_slam(const SlamCommandOptions& o) {
   }
   const eval::TrajectoryPoint& last = r.trajectory.back();
   if (o.json) {
-    nlohmann::ordered_json j;
-    j["mode"] = "slam";
-    j["scan_topic"] = r.scan_topic;
-    j["scans"] = r.scans;
-    j["scans_used"] = r.scans_used;
-    j["scans_no_odometry"] = r.scans_no_odometry;
-    j["scans_bad"] = r.scans_bad;
-    j["beams_invalid"] = r.beams_invalid;
-    j["odometry_refused"] = r.odometry_refused;
+    nlohmann::ordered_json j = counters_json("slam", r);
     j["map_points"] = r.map_points.size();
-    j["final"] = {{"t", last.t_s}, {"x", last.x_m}, {"y", last.y_m}, {"yaw", last.yaw_rad}};
     std::cout << j.dump(2) << std::endl;
     return 0;
   }

@@ -161,7 +161,41 @@ nlohmann::ordered_json summary_json(const slam::ExperimentResult& r,
   return j;
 }
 
-// runs.csv, summary.json and every trajectory, each written whole or not at all.
+// JSON has no NaN: a rate the variant does not have is null.
+nlohmann::ordered_json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+}
+
+nlohmann::ordered_json errors_json(const eval::TrajectoryErrors& e) {
+  return {{"rmse_position_m", e.rmse_position_m},
+          {"rmse_x_m", e.rmse_x_m},
+          {"rmse_y_m", e.rmse_y_m},
+          {"rmse_yaw_rad", e.rmse_yaw_rad},
+          {"max_position_error_m", e.max_position_error_m},
+          {"max_yaw_error_rad", e.max_yaw_error_rad},
+          {"final_position_error_m", e.final_position_error_m}};
+}
+
+// The per-run figures: {"runs": [{"seed", "variant", "against_truth": {...}, "diverged",
+// "against_full_range": {...} or null, "preservation_rate", "rejection_rate"}]}.
+nlohmann::ordered_json runs_json(const slam::ExperimentResult& r) {
+  nlohmann::ordered_json runs = nlohmann::ordered_json::array();
+  for (const slam::ExperimentRun& run : r.runs) {
+    nlohmann::ordered_json j;
+    j["seed"] = run.seed;
+    j["variant"] = slam::variant_name(run.variant);
+    j["against_truth"] = errors_json(run.against_truth);
+    j["diverged"] = run.diverged;
+    j["against_full_range"] =
+        run.against_full_range ? errors_json(*run.against_full_range) : nlohmann::ordered_json();
+    j["preservation_rate"] = number_or_null(run.preservation_rate);
+    j["rejection_rate"] = number_or_null(run.rejection_rate);
+    runs.push_back(j);
+  }
+  return {{"scenario", r.scenario_name}, {"runs", runs}};
+}
+
+// runs.csv, runs.json, summary.json and every trajectory, each written whole or not at all.
 void write_outputs(const std::string& dir, const slam::ExperimentResult& r,
                    const nlohmann::ordered_json& summary) {
   namespace fs = std::filesystem;
@@ -201,14 +235,16 @@ void write_outputs(const std::string& dir, const slam::ExperimentResult& r,
     if (!ok) throw io::JobError(dir + "/runs.csv: writing failed");
     file.commit();
   }
-  {
-    io::AtomicFile file((fs::path(dir) / "summary.json").string());
+  const auto write_json = [&](const char* name, const nlohmann::ordered_json& j) {
+    io::AtomicFile file((fs::path(dir) / name).string());
     std::ofstream out(file.temp_path());
-    out << summary.dump(2) << "\n";
+    out << j.dump(2) << "\n";
     out.close();
-    if (!out) throw io::JobError(dir + "/summary.json: writing failed");
+    if (!out) throw io::JobError(dir + "/" + name + ": writing failed");
     file.commit();
-  }
+  };
+  write_json("summary.json", summary);
+  write_json("runs.json", runs_json(r));
   for (std::size_t k = 0; k < r.seeds.size(); ++k) {
     const std::string prefix =
         (fs::path(dir) / "trajectories" / ("seed_" + std::to_string(r.seeds[k]) + "_")).string();
@@ -298,7 +334,8 @@ int run_experiment(const ExperimentCommandOptions& options) {
     } else {
       print_tables(r, summary, o);
       if (!options.out_dir.empty()) {
-        std::printf("wrote %s/runs.csv, summary.json, trajectories/\n", options.out_dir.c_str());
+        std::printf("wrote %s/runs.csv, runs.json, summary.json, trajectories/\n",
+                    options.out_dir.c_str());
       }
     }
   } catch (const std::exception& e) {

@@ -8,7 +8,8 @@ namespace dispel::io {
 
 /// Reserves "<path>.partial" next to @p path for writing. commit() renames it to @p path;
 /// destruction without commit() deletes it. A failure or an interruption never leaves a
-/// half-written file under the final name.
+/// half-written file under the final name. A path that names a device or a pipe (/dev/null,
+/// /dev/stdout, a FIFO) is written in place: there is no file to replace.
 class AtomicFile {
  public:
   explicit AtomicFile(std::string path);
@@ -25,6 +26,7 @@ class AtomicFile {
   std::string path_;
   std::string temp_;
   bool committed_ = false;
+  bool direct_ = false;  ///< Written in place (a device or a pipe).
 };
 
 }  // namespace dispel::io

@@ -14,6 +14,11 @@ packages=(
   python3-rosbag                       # tests: bags we write must read in Python and rosbag info
   libcairo2-dev libfontconfig-dev      # dispel render, eval --plot: PNG and SVG pictures (Cairo)
   libmrpt-slam-dev libmrpt-maps-dev libmrpt-obs-dev  # dispel::slam: MRPT's ICP-SLAM (tests)
+  pkg-config libroscpp-dev libtf2-ros-dev libvisualization-msgs-dev libdiagnostic-msgs-dev
+                                       # ROS 1 nodes (ros1/, -DDISPEL_WITH_ROS1=ON)
+  python3-rosmaster python3-roslaunch python3-rosparam tf2-tools
+                                       # their live tests: rosmaster, roslaunch,
+                                       # static_transform_publisher
 )
 
 missing=()

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs every test: first the Release build, then the unit
-# tests again under AddressSanitizer and UndefinedBehaviorSanitizer.
+# Installs what is missing, builds, and runs every test: first the Release build (with the ROS 1
+# nodes and their live tests), then the unit tests again under AddressSanitizer and
+# UndefinedBehaviorSanitizer (without the command line and the ROS 1 nodes).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -10,6 +11,6 @@ bash scripts/build.sh
 ctest --test-dir build --output-on-failure -j"$jobs"
 
 BUILD_DIR=build-sanitize BUILD_TYPE=RelWithDebInfo bash scripts/build.sh -DDISPEL_SANITIZE=ON \
-  -DDISPEL_BUILD_APPS=OFF -DDISPEL_BUILD_BENCHMARKS=OFF
+  -DDISPEL_BUILD_APPS=OFF -DDISPEL_BUILD_BENCHMARKS=OFF -DDISPEL_WITH_ROS1=OFF
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
   ctest --test-dir build-sanitize --output-on-failure -j"$jobs" -E package_

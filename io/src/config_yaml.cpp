@@ -6,6 +6,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <set>
 #include <sstream>
 
 namespace dispel::io {
@@ -83,12 +84,99 @@ class Binder {
   void section(const std::string& key) {
     sections_[key] = [this](const YAML::Node& n, const std::string& k) { apply(n, k); };
   }
+  // The keys a file may have at its top level.
+  std::set<std::string> top_level_keys() const {
+    std::set<std::string> keys;
+    for (const auto* m : {&setters_, &sections_}) {
+      for (const auto& [key, setter] : *m) keys.insert(key.substr(0, key.find('.')));
+    }
+    return keys;
+  }
 
  private:
   std::string origin_;
   std::map<std::string, Setter> setters_;
   std::map<std::string, Setter> sections_;
 };
+
+// Binds every key of the filter's configuration to its field in @p c.
+void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& origin) {
+  b.custom("preset", [](const YAML::Node&, const std::string&) {});
+  // Read by `dispel odom` (parse_odometry_settings), so that one file can configure both.
+  b.custom("odometry", [](const YAML::Node&, const std::string&) {});
+  SegmentationConfig& s = c.segmentation;
+  b.section("segmentation");
+  b.number("segmentation.cluster_gap_m", s.cluster_gap_m);
+  b.integer("segmentation.min_points", s.min_points);
+  b.choice<GapMetric>(
+      "segmentation.gap_metric", s.gap_metric,
+      {{"euclidean", GapMetric::kEuclidean}, {"range_difference", GapMetric::kRangeDifference}});
+  b.boolean("segmentation.merge_facing_edges", s.merge_facing_edges);
+  b.boolean("segmentation.join_full_circle_seam", s.join_full_circle_seam);
+  // Called by Binder::apply(), after this function has returned: nothing local by reference.
+  b.custom("segmentation.masked_sectors",
+           [sectors = &s.masked_sectors, origin](const YAML::Node& n, const std::string& k) {
+             if (!n.IsSequence()) fail(origin, k + " must be a list of [begin_rad, end_rad] pairs");
+             sectors->clear();
+             for (std::size_t i = 0; i < n.size(); ++i) {
+               const std::string item = k + "[" + std::to_string(i) + "]";
+               if (!n[i].IsSequence() || n[i].size() != 2)
+                 fail(origin, item + " must be [begin_rad, end_rad]");
+               sectors->push_back({scalar<double>(n[i][0], item, origin, "a number"),
+                                   scalar<double>(n[i][1], item, origin, "a number")});
+             }
+           });
+  TrackingConfig& t = c.tracking;
+  b.section("tracking");
+  b.number("tracking.match_distance_m", t.match_distance_m);
+  b.choice<Matching>(
+      "tracking.matching", t.matching,
+      {{"global", Matching::kGlobal}, {"nearest_neighbour", Matching::kNearestNeighbour}});
+  b.integer("tracking.max_missed_scans", t.max_missed_scans);
+  b.boolean("tracking.inherit_on_split", t.inherit_on_split);
+  b.number("tracking.max_gate_m", t.max_gate_m);
+  b.number("tracking.max_extent_change_m", t.max_extent_change_m);
+  b.number("tracking.companion_distance_m", t.companion_distance_m);
+  b.number("tracking.companion_speed_difference_mps", t.companion_speed_difference_mps);
+  b.number("tracking.fragment_distance_m", t.fragment_distance_m);
+  VelocityFilterConfig& v = c.velocity;
+  b.section("velocity");
+  b.number("velocity.position_variance_m2", v.position_variance_m2);
+  b.number("velocity.velocity_variance_m2ps2", v.velocity_variance_m2ps2);
+  b.number("velocity.measurement_variance_m2", v.measurement_variance_m2);
+  b.number("velocity.velocity_decay", v.velocity_decay);
+  b.number("velocity.nominal_scan_period_s", v.nominal_scan_period_s);
+  ClassificationConfig& k = c.classification;
+  b.section("classification");
+  b.choice<Presumption>("classification.presumption", k.presumption,
+                        {{"innocence", Presumption::kInnocence}, {"guilt", Presumption::kGuilt}});
+  b.number("classification.speed_limit_mps", k.speed_limit_mps);
+  b.integer("classification.dynamic_weight_limit", k.dynamic_weight_limit);
+  b.integer("classification.static_weight_limit", k.static_weight_limit);
+  b.number("classification.max_direction_difference_rad", k.max_direction_difference_rad);
+  b.number("classification.max_dynamic_extent_m", k.max_dynamic_extent_m);
+  b.number("classification.max_point_count_ratio", k.max_point_count_ratio);
+  b.integer("classification.still_scans_to_static", k.still_scans_to_static);
+  b.boolean("classification.slow_scans_reduce_dynamic_weight", k.slow_scans_reduce_dynamic_weight);
+  FreeSpaceConfig& f = c.free_space;
+  b.section("free_space");
+  b.boolean("free_space.enabled", f.enabled);
+  b.number("free_space.cell_size_m", f.cell_size_m);
+  b.number("free_space.extent_m", f.extent_m);
+  b.number("free_space.margin_m", f.margin_m);
+  b.integer("free_space.min_free_observations", f.min_free_observations);
+  b.integer("free_space.max_recent_hits", f.max_recent_hits);
+  b.number("free_space.free_range_m", f.free_range_m);
+  b.boolean("free_space.no_return_is_free", f.no_return_is_free);
+  b.number("free_space.memory_s", f.memory_s);
+  b.boolean("free_space.keep_long_occupied", f.keep_long_occupied);
+  b.integer("free_space.long_occupied_scans", f.long_occupied_scans);
+  b.integer("free_space.neighbourhood_cells", f.neighbourhood_cells);
+  b.number("free_space.min_object_share", f.min_object_share);
+  b.number("max_time_gap_s", c.max_time_gap_s);
+  b.number("max_pose_jump_m", c.max_pose_jump_m);
+  b.number("max_pose_jump_rad", c.max_pose_jump_rad);
+}
 
 }  // namespace
 
@@ -103,7 +191,6 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
   if (root.IsNull()) {
     // An empty file: all defaults.
   } else {
-    Binder b(origin);
     // The starting point, whatever its place in the file: every other key changes it.
     if (root.IsMap() && root["preset"]) {
       const std::string preset = scalar<std::string>(root["preset"], "preset", origin, "a word");
@@ -113,80 +200,8 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
         fail(origin, "preset must be one of default, thesis, got '" + preset + "'");
       }
     }
-    b.custom("preset", [](const YAML::Node&, const std::string&) {});
-    // Read by `dispel odom` (parse_odometry_settings), so that one file can configure both.
-    b.custom("odometry", [](const YAML::Node&, const std::string&) {});
-    SegmentationConfig& s = c.segmentation;
-    b.section("segmentation");
-    b.number("segmentation.cluster_gap_m", s.cluster_gap_m);
-    b.integer("segmentation.min_points", s.min_points);
-    b.choice<GapMetric>(
-        "segmentation.gap_metric", s.gap_metric,
-        {{"euclidean", GapMetric::kEuclidean}, {"range_difference", GapMetric::kRangeDifference}});
-    b.boolean("segmentation.merge_facing_edges", s.merge_facing_edges);
-    b.boolean("segmentation.join_full_circle_seam", s.join_full_circle_seam);
-    b.custom("segmentation.masked_sectors", [&](const YAML::Node& n, const std::string& k) {
-      if (!n.IsSequence()) fail(origin, k + " must be a list of [begin_rad, end_rad] pairs");
-      s.masked_sectors.clear();
-      for (std::size_t i = 0; i < n.size(); ++i) {
-        const std::string item = k + "[" + std::to_string(i) + "]";
-        if (!n[i].IsSequence() || n[i].size() != 2)
-          fail(origin, item + " must be [begin_rad, end_rad]");
-        s.masked_sectors.push_back({scalar<double>(n[i][0], item, origin, "a number"),
-                                    scalar<double>(n[i][1], item, origin, "a number")});
-      }
-    });
-    TrackingConfig& t = c.tracking;
-    b.section("tracking");
-    b.number("tracking.match_distance_m", t.match_distance_m);
-    b.choice<Matching>(
-        "tracking.matching", t.matching,
-        {{"global", Matching::kGlobal}, {"nearest_neighbour", Matching::kNearestNeighbour}});
-    b.integer("tracking.max_missed_scans", t.max_missed_scans);
-    b.boolean("tracking.inherit_on_split", t.inherit_on_split);
-    b.number("tracking.max_gate_m", t.max_gate_m);
-    b.number("tracking.max_extent_change_m", t.max_extent_change_m);
-    b.number("tracking.companion_distance_m", t.companion_distance_m);
-    b.number("tracking.companion_speed_difference_mps", t.companion_speed_difference_mps);
-    b.number("tracking.fragment_distance_m", t.fragment_distance_m);
-    VelocityFilterConfig& v = c.velocity;
-    b.section("velocity");
-    b.number("velocity.position_variance_m2", v.position_variance_m2);
-    b.number("velocity.velocity_variance_m2ps2", v.velocity_variance_m2ps2);
-    b.number("velocity.measurement_variance_m2", v.measurement_variance_m2);
-    b.number("velocity.velocity_decay", v.velocity_decay);
-    b.number("velocity.nominal_scan_period_s", v.nominal_scan_period_s);
-    ClassificationConfig& k = c.classification;
-    b.section("classification");
-    b.choice<Presumption>("classification.presumption", k.presumption,
-                          {{"innocence", Presumption::kInnocence}, {"guilt", Presumption::kGuilt}});
-    b.number("classification.speed_limit_mps", k.speed_limit_mps);
-    b.integer("classification.dynamic_weight_limit", k.dynamic_weight_limit);
-    b.integer("classification.static_weight_limit", k.static_weight_limit);
-    b.number("classification.max_direction_difference_rad", k.max_direction_difference_rad);
-    b.number("classification.max_dynamic_extent_m", k.max_dynamic_extent_m);
-    b.number("classification.max_point_count_ratio", k.max_point_count_ratio);
-    b.integer("classification.still_scans_to_static", k.still_scans_to_static);
-    b.boolean("classification.slow_scans_reduce_dynamic_weight",
-              k.slow_scans_reduce_dynamic_weight);
-    FreeSpaceConfig& f = c.free_space;
-    b.section("free_space");
-    b.boolean("free_space.enabled", f.enabled);
-    b.number("free_space.cell_size_m", f.cell_size_m);
-    b.number("free_space.extent_m", f.extent_m);
-    b.number("free_space.margin_m", f.margin_m);
-    b.integer("free_space.min_free_observations", f.min_free_observations);
-    b.integer("free_space.max_recent_hits", f.max_recent_hits);
-    b.number("free_space.free_range_m", f.free_range_m);
-    b.boolean("free_space.no_return_is_free", f.no_return_is_free);
-    b.number("free_space.memory_s", f.memory_s);
-    b.boolean("free_space.keep_long_occupied", f.keep_long_occupied);
-    b.integer("free_space.long_occupied_scans", f.long_occupied_scans);
-    b.integer("free_space.neighbourhood_cells", f.neighbourhood_cells);
-    b.number("free_space.min_object_share", f.min_object_share);
-    b.number("max_time_gap_s", c.max_time_gap_s);
-    b.number("max_pose_jump_m", c.max_pose_jump_m);
-    b.number("max_pose_jump_rad", c.max_pose_jump_rad);
+    Binder b(origin);
+    bind_filter_config(b, c, origin);
     b.apply(root, "");
   }
   try {
@@ -195,6 +210,13 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
     fail(origin, e.what());
   }
   return c;
+}
+
+std::set<std::string> filter_config_top_level_keys() {
+  DynamicFilterConfig c;
+  Binder b("");
+  bind_filter_config(b, c, "");
+  return b.top_level_keys();
 }
 
 namespace {

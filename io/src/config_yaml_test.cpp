@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
 #include <string>
 
 namespace dispel::io {
@@ -135,6 +136,22 @@ TEST(ConfigYaml, UnknownKeysWrongTypesAndBadValuesAreErrorsNamingTheKey) {
   expect_error("a: [unclosed", "not valid YAML");
   expect_error("max_time_gap_s:", "max_time_gap_s has no value");
   EXPECT_THROW(load_filter_config("/nonexistent/dispel.yaml"), ConfigError);
+}
+
+TEST(ConfigYaml, TopLevelKeysAreThoseTheParserAccepts) {
+  const std::set<std::string> keys = filter_config_top_level_keys();
+  EXPECT_EQ(keys,
+            (std::set<std::string>{"preset", "odometry", "segmentation", "tracking", "velocity",
+                                   "classification", "free_space", "max_time_gap_s",
+                                   "max_pose_jump_m", "max_pose_jump_rad"}));
+  // Each of them is accepted...
+  for (const char* text : {"segmentation: {}", "tracking: {}", "velocity: {}", "classification: {}",
+                           "free_space: {}", "max_time_gap_s: 1.0", "max_pose_jump_m: 1.0",
+                           "max_pose_jump_rad: 1.0", "preset: thesis", "odometry: {model: ct}"}) {
+    EXPECT_NO_THROW(parse_filter_config(text, "t.yaml")) << text;
+  }
+  // ...and anything else is not.
+  EXPECT_THROW(parse_filter_config("fixed_frame: odom\n", "t.yaml"), ConfigError);
 }
 
 }  // namespace

@@ -8,7 +8,6 @@
 #include <sensor_msgs/NavSatFix.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -20,6 +19,7 @@
 #include "dispel/io/bag_topics.hpp"
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/filter_job.hpp"
+#include "dispel/io/ros_convert.hpp"
 
 namespace dispel::io {
 namespace {
@@ -108,31 +108,6 @@ struct Measurement {
   double b;  // Wheels: v_right.
 };
 
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-// Index of the joint named `wanted`, or (when empty) the first whose name contains `side`; else
-// `fallback`.
-int joint_index(const sensor_msgs::JointState& js, const std::string& wanted,
-                const std::string& side, int fallback) {
-  for (std::size_t i = 0; i < js.name.size(); ++i) {
-    if (wanted.empty() ? lower(js.name[i]).find(side) != std::string::npos : js.name[i] == wanted) {
-      return static_cast<int>(i);
-    }
-  }
-  return wanted.empty() ? fallback : -1;
-}
-
-double stamp_or(const ros::Time& header, const ros::Time& received) {
-  return header.isZero() ? received.toSec() : header.toSec();
-}
-
-double yaw_of(const geometry_msgs::Quaternion& q) {
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
-}
-
 // Sorts one source's measurements by time, counting those that came earlier than their
 // predecessor.
 void sort_by_time(std::vector<Measurement>& m, OdomJobStats& stats) {
@@ -199,7 +174,6 @@ Inputs read_bag(const OdomJobOptions& o, const OdometrySettings& settings, OdomJ
 
   Inputs in;
   const double b = settings.filter.track_width_m;
-  const double radius = settings.wheel_radius_m;
   bool have_origin = false;
   double lat0 = 0.0, lon0 = 0.0;
   try {
@@ -214,32 +188,24 @@ Inputs read_bag(const OdomJobOptions& o, const OdometrySettings& settings, OdomJ
         if (wheels_from_odometry) {
           const auto od = m.instantiate<nav_msgs::Odometry>();
           if (!od) continue;
-          const double v = od->twist.twist.linear.x, w = od->twist.twist.angular.z;
-          in.wheels.push_back(
-              {stamp_or(od->header.stamp, m.getTime()), false, v - 0.5 * w * b, v + 0.5 * w * b});
+          const WheelSpeeds w = wheel_speeds_from_ros(*od, b, m.getTime());
+          in.wheels.push_back({w.t_s, false, w.left_mps, w.right_mps});
         } else {
           const auto js = m.instantiate<sensor_msgs::JointState>();
           if (!js) continue;
-          const int l = joint_index(*js, settings.left_wheel_joint, "left", 0);
-          const int r = joint_index(*js, settings.right_wheel_joint, "right", 1);
-          if (l < 0 || r < 0 || l == r ||
-              static_cast<std::size_t>(std::max(l, r)) >= js->velocity.size()) {
+          const auto w = wheel_speeds_from_ros(*js, settings, m.getTime());
+          if (!w) {
             ++stats.malformed;
             continue;
           }
-          const double scale = radius > 0.0 ? radius : 1.0;
-          in.wheels.push_back({stamp_or(js->header.stamp, m.getTime()), false,
-                               scale * js->velocity[static_cast<std::size_t>(l)],
-                               scale * js->velocity[static_cast<std::size_t>(r)]});
+          in.wheels.push_back({w->t_s, false, w->left_mps, w->right_mps});
         }
       }
       if (topic == imu_topic) {
         ++stats.imu_messages;
         if (const auto imu = m.instantiate<sensor_msgs::Imu>()) {
-          const geometry_msgs::Vector3& w = imu->angular_velocity;
-          const double axes[3] = {w.x, w.y, w.z};
           in.imu.push_back({stamp_or(imu->header.stamp, m.getTime()), true,
-                            settings.imu_yaw_sign * axes[settings.imu_yaw_axis], 0.0});
+                            yaw_rate_from_ros(*imu, settings), 0.0});
         }
       }
       if (!o.truth_csv.empty() && topic == o.truth_topic && truth_is_gps) {

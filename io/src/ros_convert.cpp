@@ -1,5 +1,7 @@
 #include "dispel/io/ros_convert.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 
 namespace dispel::io {
@@ -15,6 +17,10 @@ ros::Time to_ros_time(double seconds) {
     ++sec;
   }
   return ros::Time(static_cast<std::uint32_t>(sec), static_cast<std::uint32_t>(nsec));
+}
+
+double stamp_or(const ros::Time& header, const ros::Time& received) {
+  return header.isZero() ? received.toSec() : header.toSec();
 }
 
 LaserScan from_ros(const sensor_msgs::LaserScan& msg) {
@@ -96,6 +102,54 @@ sensor_msgs::LaserScan labels_message(const sensor_msgs::LaserScan& original,
     msg.intensities[i] = static_cast<float>(result.labels[i]);
   }
   return msg;
+}
+
+namespace {
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// Index of the joint named `wanted`, or (when empty) the first whose name contains `side`; else
+// `fallback`.
+int joint_index(const sensor_msgs::JointState& js, const std::string& wanted,
+                const std::string& side, int fallback) {
+  for (std::size_t i = 0; i < js.name.size(); ++i) {
+    if (wanted.empty() ? lower(js.name[i]).find(side) != std::string::npos : js.name[i] == wanted) {
+      return static_cast<int>(i);
+    }
+  }
+  return wanted.empty() ? fallback : -1;
+}
+
+}  // namespace
+
+std::optional<WheelSpeeds> wheel_speeds_from_ros(const sensor_msgs::JointState& msg,
+                                                 const OdometrySettings& settings,
+                                                 const ros::Time& received) {
+  const int l = joint_index(msg, settings.left_wheel_joint, "left", 0);
+  const int r = joint_index(msg, settings.right_wheel_joint, "right", 1);
+  if (l < 0 || r < 0 || l == r || static_cast<std::size_t>(std::max(l, r)) >= msg.velocity.size()) {
+    return std::nullopt;
+  }
+  const double scale = settings.wheel_radius_m > 0.0 ? settings.wheel_radius_m : 1.0;
+  return WheelSpeeds{stamp_or(msg.header.stamp, received),
+                     scale * msg.velocity[static_cast<std::size_t>(l)],
+                     scale * msg.velocity[static_cast<std::size_t>(r)]};
+}
+
+WheelSpeeds wheel_speeds_from_ros(const nav_msgs::Odometry& msg, double track_width_m,
+                                  const ros::Time& received) {
+  const double v = msg.twist.twist.linear.x, w = msg.twist.twist.angular.z;
+  return {stamp_or(msg.header.stamp, received), v - 0.5 * w * track_width_m,
+          v + 0.5 * w * track_width_m};
+}
+
+double yaw_rate_from_ros(const sensor_msgs::Imu& msg, const OdometrySettings& settings) {
+  const geometry_msgs::Vector3& w = msg.angular_velocity;
+  const double axes[3] = {w.x, w.y, w.z};
+  return settings.imu_yaw_sign * axes[settings.imu_yaw_axis];
 }
 
 }  // namespace dispel::io

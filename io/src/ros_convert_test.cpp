@@ -53,5 +53,43 @@ TEST(RosConvert, ScanRoundTripsAndFilterOutputKeepsTheHeader) {
   EXPECT_EQ(labels.intensities, (std::vector<float>{0.0F, 1.0F, 3.0F}));
 }
 
+TEST(RosConvert, WheelSpeedsFromJointStateOdometryAndImuFollowTheSettings) {
+  OdometrySettings settings;
+  sensor_msgs::JointState js;
+  js.header.stamp = ros::Time(10, 500000000);
+  js.name = {"front_right_wheel", "front_left_wheel"};
+  js.velocity = {2.0, 1.0};
+  auto w = wheel_speeds_from_ros(js, settings, ros::Time(99));
+  ASSERT_TRUE(w.has_value());
+  EXPECT_DOUBLE_EQ(w->t_s, 10.5);
+  EXPECT_DOUBLE_EQ(w->left_mps, 1.0);  // By name, not by position.
+  EXPECT_DOUBLE_EQ(w->right_mps, 2.0);
+  settings.wheel_radius_m = 0.1;  // rad/s of wheels of 0.1 m.
+  js.header.stamp = ros::Time();  // No stamp: the receive time.
+  w = wheel_speeds_from_ros(js, settings, ros::Time(99));
+  ASSERT_TRUE(w.has_value());
+  EXPECT_DOUBLE_EQ(w->t_s, 99.0);
+  EXPECT_DOUBLE_EQ(w->left_mps, 0.1);
+  settings.left_wheel_joint = "rear_left_wheel";  // Named but absent.
+  EXPECT_FALSE(wheel_speeds_from_ros(js, settings, ros::Time(99)).has_value());
+
+  nav_msgs::Odometry od;
+  od.header.stamp = ros::Time(3);
+  od.twist.twist.linear.x = 1.0;
+  od.twist.twist.angular.z = 0.5;
+  const WheelSpeeds from_odom = wheel_speeds_from_ros(od, 0.4, ros::Time(99));
+  EXPECT_DOUBLE_EQ(from_odom.t_s, 3.0);
+  EXPECT_DOUBLE_EQ(from_odom.left_mps, 0.9);
+  EXPECT_DOUBLE_EQ(from_odom.right_mps, 1.1);
+
+  sensor_msgs::Imu imu;
+  imu.angular_velocity.x = 1.0;
+  imu.angular_velocity.y = 2.0;
+  imu.angular_velocity.z = 3.0;
+  EXPECT_DOUBLE_EQ(yaw_rate_from_ros(imu, settings), 3.0);
+  settings = parse_odometry_settings("odometry: {imu_yaw_axis: -y}\n", "t.yaml");
+  EXPECT_DOUBLE_EQ(yaw_rate_from_ros(imu, settings), -2.0);
+}
+
 }  // namespace
 }  // namespace dispel::io

@@ -9,6 +9,7 @@
 ///   odometry: {...}            read by `dispel odom` (parse_odometry_settings), skipped here
 /// Missing keys keep the preset's value. Unknown keys, wrong types and invalid values are errors.
 
+#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -28,6 +29,11 @@ DynamicFilterConfig load_filter_config(const std::string& path);
 
 /// Parses and validates YAML text; @p origin names it in errors. @throws ConfigError
 DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std::string& origin);
+
+/// The keys parse_filter_config() accepts at the top level of a file ("preset", "segmentation",
+/// ..., "max_time_gap_s", and "odometry", which it skips): for a reader of the `odometry:` section
+/// that must tell the filter's keys from unknown ones in a shared file.
+std::set<std::string> filter_config_top_level_keys();
 
 /// What `dispel odom` reads from the `odometry:` section of a YAML file (other keys are the
 /// filter's and are not looked at): OdometryConfig's fields under their own names, plus how wheel

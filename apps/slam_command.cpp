@@ -115,7 +115,9 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
 
+// A statistic over no values (a rejection rate where nothing moved) is null.
 nlohmann::ordered_json statistic_json(const slam::Statistic& s) {
+  if (s.count == 0) return nullptr;
   return {{"mean", s.mean}, {"std", s.std}, {"median", s.median}};
 }
 
@@ -295,8 +297,13 @@ void print_tables(const slam::ExperimentResult& r, const std::vector<slam::Varia
     if (s.variant != slam::Variant::kFilteredPoi && s.variant != slam::Variant::kFilteredPog) {
       continue;
     }
-    std::printf("\n%s: the filter kept %.4f of the static beams and removed %.4f of the moving",
-                slam::variant_name(s.variant), s.preservation_rate.mean, s.rejection_rate.mean);
+    std::printf("\n%s: the filter kept %.4f of the static beams", slam::variant_name(s.variant),
+                s.preservation_rate.mean);
+    if (s.rejection_rate.count > 0) {
+      std::printf(" and removed %.4f of the moving", s.rejection_rate.mean);
+    } else {
+      std::printf("; nothing moved");
+    }
   }
   std::printf("\n");
 }

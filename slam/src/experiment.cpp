@@ -116,6 +116,7 @@ void check(const ExperimentOptions& o) {
 
 Statistic statistic(std::vector<double> v) {
   Statistic s;
+  s.count = static_cast<int>(v.size());
   if (v.empty()) return s;
   double sum = 0.0;
   for (double x : v) sum += x;

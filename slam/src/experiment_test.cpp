@@ -167,7 +167,8 @@ TEST(Experiment, SummariesAreMeansStandardDeviationsMediansAndDivergenceCounts) 
   EXPECT_NEAR(raw.rmse_position_m.std, 0.1, 1e-12);  // Sample standard deviation.
   EXPECT_NEAR(raw.rmse_position_m.median, 0.2, 1e-12);
   EXPECT_NEAR(raw.rmse_yaw_rad.mean, 0.02, 1e-12);
-  EXPECT_EQ(raw.rejection_rate.mean, 0.0);  // None: not a filtered variant.
+  EXPECT_EQ(raw.rejection_rate.count, 0);  // None: not a filtered variant.
+  EXPECT_EQ(raw.rmse_position_m.count, 3);
   const VariantSummary& poi = find(s, Variant::kFilteredPoi);
   EXPECT_EQ(poi.diverged, 0);
   EXPECT_NEAR(poi.rmse_position_m.std, 0.0, 1e-12);

@@ -86,6 +86,7 @@ struct Statistic {
   double mean = 0.0;
   double std = 0.0;
   double median = 0.0;
+  int count = 0;  ///< Values it is over (0: none, e.g. a rejection rate where nothing moved).
 };
 
 /// One variant over all seeds.

@@ -79,6 +79,13 @@ void add_slam_commands(CLI::App& app, SlamCli& cli) {
                    "... or its yaw error ever exceeds this (deg)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  cli.experiment_cmd->add_flag(
+      "--localization", cli.experiment.job.localization,
+      "Also localise raw, filtered and oracle scans (particle filter) in the oracle's SLAM map");
+  cli.experiment_cmd
+      ->add_option("--particles", cli.experiment.job.particles, "With --localization: particles")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
   cli.experiment_cmd->add_flag("--keep-bags", cli.experiment.job.keep_bags,
                                "Keep the bags of each seed under OUT/bags/ (needs --out)");
 }

@@ -134,6 +134,7 @@ nlohmann::ordered_json summary_json(const slam::ExperimentResult& r,
   nlohmann::ordered_json variants = nlohmann::ordered_json::object();
   nlohmann::ordered_json reference = nlohmann::ordered_json::object();
   nlohmann::ordered_json thesis = nlohmann::ordered_json::object();
+  nlohmann::ordered_json localization = nlohmann::ordered_json::object();
   for (const slam::VariantSummary& s : summary) {
     nlohmann::ordered_json v;
     v["runs"] = s.runs;
@@ -143,12 +144,14 @@ nlohmann::ordered_json summary_json(const slam::ExperimentResult& r,
     v["rmse_yaw_rad"] = statistic_json(s.rmse_yaw_rad);
     v["max_position_error_m"] = statistic_json(s.max_position_error_m);
     v["diverged"] = s.diverged;
-    if (s.variant == slam::Variant::kFilteredPoi || s.variant == slam::Variant::kFilteredPog) {
+    if (s.preservation_rate.count > 0) {
       v["preservation_rate"] = statistic_json(s.preservation_rate);
       v["rejection_rate"] = statistic_json(s.rejection_rate);
     }
     const char* name = slam::variant_name(s.variant);
-    if (s.variant == slam::Variant::kFullRange || s.variant == slam::Variant::kOdometry) {
+    if (slam::is_localization_variant(s.variant)) {
+      localization[name] = v;
+    } else if (!slam::is_cut_slam_variant(s.variant)) {
       reference[name] = v;
     } else {
       variants[name] = v;
@@ -160,6 +163,7 @@ nlohmann::ordered_json summary_json(const slam::ExperimentResult& r,
   j["variants"] = variants;
   j["reference"] = reference;
   j["against_full_range"] = thesis;
+  if (!localization.empty()) j["localization"] = localization;
   return j;
 }
 
@@ -275,10 +279,10 @@ void print_tables(const slam::ExperimentResult& r, const std::vector<slam::Varia
       "deg\n\n",
       r.scenario_name.c_str(), r.seeds.size(), r.duration_s, r.range_limit_m,
       o.divergence_position_m, o.divergence_yaw_rad * kRadToDeg);
-  std::printf("%-13s %-17s %-17s %-17s %-15s %-17s %s\n", "variant", "position (m)", "x (m)",
+  std::printf("%-25s %-17s %-17s %-17s %-15s %-17s %s\n", "variant", "position (m)", "x (m)",
               "y (m)", "yaw (deg)", "largest (m)", "diverged");
   for (const slam::VariantSummary& s : summary) {
-    std::printf("%-13s %-17s %-17s %-17s %-15s %-17s %d of %d\n", slam::variant_name(s.variant),
+    std::printf("%-25s %-17s %-17s %-17s %-15s %-17s %d of %d\n", slam::variant_name(s.variant),
                 mean_std(s.rmse_position_m, 1.0, 3).c_str(), mean_std(s.rmse_x_m, 1.0, 3).c_str(),
                 mean_std(s.rmse_y_m, 1.0, 3).c_str(),
                 mean_std(s.rmse_yaw_rad, kRadToDeg, 2).c_str(),
@@ -287,7 +291,7 @@ void print_tables(const slam::ExperimentResult& r, const std::vector<slam::Varia
   std::printf("\nThe thesis's protocol (its Table 4.1): RMSE against the full-range SLAM run\n\n");
   std::printf("%-13s %-17s %-17s %-15s\n", "variant", "x (m)", "y (m)", "yaw (deg)");
   for (const slam::VariantSummary& s : summary) {
-    if (s.variant == slam::Variant::kFullRange || s.variant == slam::Variant::kOdometry) continue;
+    if (!slam::is_cut_slam_variant(s.variant)) continue;
     std::printf("%-13s %-17s %-17s %-15s\n", slam::variant_name(s.variant),
                 mean_std(s.full_range_rmse_x_m, 1.0, 3).c_str(),
                 mean_std(s.full_range_rmse_y_m, 1.0, 3).c_str(),
@@ -328,7 +332,7 @@ int run_experiment(const ExperimentCommandOptions& options) {
   try {
     const slam::ExperimentResult r = slam::run_experiment(o, [&](const slam::ExperimentRun& run) {
       if (options.json) return;
-      std::fprintf(stderr, "seed %llu %-13s RMSE %.3f m, %.2f deg%s\n",
+      std::fprintf(stderr, "seed %llu %-25s RMSE %.3f m, %.2f deg%s\n",
                    static_cast<unsigned long long>(run.seed), slam::variant_name(run.variant),
                    run.against_truth.rmse_position_m, run.against_truth.rmse_yaw_rad * kRadToDeg,
                    run.diverged ? " (diverged)" : "");

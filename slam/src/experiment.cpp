@@ -16,6 +16,7 @@
 #include "dispel/io/sim_bag.hpp"
 #include "dispel/sim/simulator.hpp"
 #include "dispel/slam/icp_slam.hpp"
+#include "dispel/slam/localization.hpp"
 
 namespace dispel::slam {
 namespace {
@@ -112,6 +113,9 @@ void check(const ExperimentOptions& o) {
     throw JobError("the divergence thresholds must be positive");
   }
   if (o.work_dir.empty()) throw JobError("no work directory given");
+  if (o.particles < 1) {
+    throw JobError("--particles must be at least 1 (got " + std::to_string(o.particles) + ")");
+  }
 }
 
 Statistic statistic(std::vector<double> v) {
@@ -146,8 +150,26 @@ const char* variant_name(Variant v) {
       return "full_range";
     case Variant::kOdometry:
       return "odometry";
+    case Variant::kLocalizationRaw:
+      return "localization_raw";
+    case Variant::kLocalizationFilteredPoi:
+      return "localization_filtered_poi";
+    case Variant::kLocalizationFilteredPog:
+      return "localization_filtered_pog";
+    case Variant::kLocalizationOracle:
+      return "localization_oracle";
   }
   return "?";
+}
+
+bool is_cut_slam_variant(Variant v) {
+  return v == Variant::kRaw || v == Variant::kFilteredPoi || v == Variant::kFilteredPog ||
+         v == Variant::kOracle;
+}
+
+bool is_localization_variant(Variant v) {
+  return v == Variant::kLocalizationRaw || v == Variant::kLocalizationFilteredPoi ||
+         v == Variant::kLocalizationFilteredPog || v == Variant::kLocalizationOracle;
 }
 
 ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProgress& progress) {
@@ -199,38 +221,73 @@ ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProg
     const Variant order[] = {Variant::kFullRange, Variant::kRaw, Variant::kFilteredPoi,
                              Variant::kFilteredPog, Variant::kOracle};
     std::vector<ExperimentRun> runs(kVariantCount);
+    std::vector<char> ran(kVariantCount, 0);
     std::vector<eval::TrajectoryPoint> odometry;
-    for (Variant v : order) {
-      SlamOptions slam;
-      slam.input = bag(variant_name(v));
-      slam.scan_topic =
-          (v == Variant::kFilteredPoi || v == Variant::kFilteredPog) ? "/scan_filtered" : "/scan";
-      slam.engine_config_ini = o.engine_config_ini;
-      SlamResult r = run_icp_slam_full(slam);
-      ExperimentRun& run = runs[static_cast<std::size_t>(v)];
-      run.seed = seed;
-      run.variant = v;
-      run.trajectory = std::move(r.trajectory);
+    GridMap map;  // The oracle's: the hall without the people.
+    const auto rates_of = [&](Variant v, ExperimentRun& run) {
       run.preservation_rate = run.rejection_rate = std::numeric_limits<double>::quiet_NaN();
       if (v == Variant::kFilteredPoi || v == Variant::kFilteredPog) {
-        const eval::Rates rates = io::evaluate_bags(bag("raw"), slam.input);
+        const eval::Rates rates = io::evaluate_bags(bag("raw"), bag(variant_name(v)));
         run.preservation_rate = rates.preservation_rate();
         run.rejection_rate = rates.rejection_rate();
       }
+    };
+    const auto scan_topic = [](Variant v) {
+      return (v == Variant::kFilteredPoi || v == Variant::kFilteredPog) ? "/scan_filtered"
+                                                                        : "/scan";
+    };
+    for (Variant v : order) {
+      SlamOptions slam;
+      slam.input = bag(variant_name(v));
+      slam.scan_topic = scan_topic(v);
+      slam.engine_config_ini = o.engine_config_ini;
+      SlamResult r = run_icp_slam_full(slam);
+      ExperimentRun& run = runs[static_cast<std::size_t>(v)];
+      ran[static_cast<std::size_t>(v)] = 1;
+      run.seed = seed;
+      run.variant = v;
+      run.trajectory = std::move(r.trajectory);
+      rates_of(v, run);
       if (v == Variant::kRaw) odometry = std::move(r.odometry);
+      if (v == Variant::kOracle) map = std::move(r.grid);
     }
     ExperimentRun& odo = runs[static_cast<std::size_t>(Variant::kOdometry)];
+    ran[static_cast<std::size_t>(Variant::kOdometry)] = 1;
     odo.seed = seed;
     odo.variant = Variant::kOdometry;
     odo.trajectory = std::move(odometry);
-    odo.preservation_rate = odo.rejection_rate = std::numeric_limits<double>::quiet_NaN();
+    rates_of(Variant::kOdometry, odo);
+
+    // Localisation in the oracle's map, from the true start, one seed per run.
+    if (o.localization) {
+      for (Variant v :
+           {Variant::kRaw, Variant::kFilteredPoi, Variant::kFilteredPog, Variant::kOracle}) {
+        LocalizationOptions l;
+        l.input = bag(variant_name(v));
+        l.scan_topic = scan_topic(v);
+        l.map = map;
+        l.initial_pose = Pose2{truth.front().x_m, truth.front().y_m, truth.front().yaw_rad};
+        l.filter.particles = o.particles;
+        l.filter.seed = seed;
+        const auto lv =
+            static_cast<Variant>(static_cast<int>(Variant::kLocalizationRaw) + static_cast<int>(v));
+        ExperimentRun& run = runs[static_cast<std::size_t>(lv)];
+        ran[static_cast<std::size_t>(lv)] = 1;
+        run.seed = seed;
+        run.variant = lv;
+        run.trajectory = run_pf_localization(l).trajectory;
+        rates_of(v, run);
+      }
+    }
 
     const auto& reference = runs[static_cast<std::size_t>(Variant::kFullRange)].trajectory;
-    for (ExperimentRun& run : runs) {
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      if (ran[i] == 0) continue;
+      ExperimentRun& run = runs[i];
       run.against_truth = compare(truth, run.trajectory);
       run.diverged = run.against_truth.max_position_error_m > o.divergence_position_m ||
                      run.against_truth.max_yaw_error_rad > o.divergence_yaw_rad;
-      if (run.variant != Variant::kFullRange && run.variant != Variant::kOdometry) {
+      if (is_cut_slam_variant(run.variant)) {
         run.against_full_range = compare(reference, run.trajectory);
       }
       if (progress) progress(run);

@@ -26,10 +26,29 @@
 namespace dispel::slam {
 
 /// The SLAM variants, in table order.
-enum class Variant { kRaw, kFilteredPoi, kFilteredPog, kOracle, kFullRange, kOdometry };
-inline constexpr int kVariantCount = 6;
-/// "raw", "filtered_poi", "filtered_pog", "oracle", "full_range", "odometry".
+enum class Variant {
+  kRaw,
+  kFilteredPoi,
+  kFilteredPog,
+  kOracle,
+  kFullRange,
+  kOdometry,
+  // With ExperimentOptions::localization: particle-filter localisation of the same scans in the
+  // map the oracle's SLAM run built (a map made earlier without the people).
+  kLocalizationRaw,
+  kLocalizationFilteredPoi,
+  kLocalizationFilteredPog,
+  kLocalizationOracle,
+};
+inline constexpr int kVariantCount = 10;
+/// "raw", "filtered_poi", "filtered_pog", "oracle", "full_range", "odometry", and
+/// "localization_raw" ... "localization_oracle".
 const char* variant_name(Variant v);
+/// The SLAM runs on the cut scans (raw, filtered_poi, filtered_pog, oracle): the ones the
+/// thesis's protocol compares with full_range.
+bool is_cut_slam_variant(Variant v);
+/// The localisation runs.
+bool is_localization_variant(Variant v);
 
 struct ExperimentOptions {
   std::string scenario;              ///< SCENARIO.yaml.
@@ -43,6 +62,11 @@ struct ExperimentOptions {
   /// Where the bags of a seed are written while it runs (removed after it unless keep_bags).
   std::string work_dir;
   bool keep_bags = false;
+  /// Also localise each of raw, filtered_poi, filtered_pog and oracle with MRPT's particle filter
+  /// in the map of the oracle's SLAM run (0.05 m grid), from the true start pose, seeded with the
+  /// seed.
+  bool localization = false;
+  int particles = 500;  ///< For the localisation runs.
   /// A run diverged when its position error against the truth ever exceeds this ...
   double divergence_position_m = 0.5;
   /// ... or its yaw error ever exceeds this.
@@ -54,7 +78,7 @@ struct ExperimentRun {
   std::uint64_t seed = 0;
   Variant variant = Variant::kRaw;
   eval::TrajectoryErrors against_truth;
-  /// Against full_range's trajectory (the thesis's protocol); absent for full_range and odometry.
+  /// Against full_range's trajectory (the thesis's protocol); only for the cut SLAM runs.
   std::optional<eval::TrajectoryErrors> against_full_range;
   bool diverged = false;
   /// Filtered variants: the filter's rates on this seed (dispel eval); NaN otherwise.

@@ -20,6 +20,23 @@ namespace dispel::apps {
 namespace {
 
 // The counters both modes share, and the final pose.
+// Runs @p run (either mode), writes its trajectory (and the odometry, when asked), then
+// @p extra_output; false with a one-line message on failure.
+template <typename Result, typename Run, typename Extra>
+bool run_and_write(const SlamCommandOptions& o, Result& r, const Run& run,
+                   const Extra& extra_output) {
+  try {
+    r = run();
+    extra_output(r);
+    if (!o.odom_csv.empty()) io::write_trajectory_csv(o.odom_csv, r.odometry);
+    io::write_trajectory_csv(o.output, r.trajectory);
+    return true;
+  } catch (const std::exception& e) {
+    std::cerr << "dispel slam: " << e.what() << "\n";
+    return false;
+  }
+}
+
 template <typename Result>
 nlohmann::ordered_json counters_json(const char* mode, const Result& r) {
   const eval::TrajectoryPoint& last = r.trajectory.back();
@@ -43,12 +60,8 @@ int run_localization(const SlamCommandOptions& o) {
   l.scan_topic = o.job.scan_topic;
   l.odom_topic = o.job.odom_topic;
   l.map_yaml = o.map;
-  try {
-    r = slam::run_pf_localization(l);
-    if (!o.odom_csv.empty()) io::write_trajectory_csv(o.odom_csv, r.odometry);
-    io::write_trajectory_csv(o.output, r.trajectory);
-  } catch (const std::exception& e) {
-    std::cerr << "dispel slam: " << e.what() << "\n";
+  if (!run_and_write(
+          o, r, [&] { return slam::run_pf_localization(l); }, [](const auto&) {})) {
     return 1;
   }
   const eval::TrajectoryPoint& last = r.trajectory.back();
@@ -80,15 +93,12 @@ int run_slam(const SlamCommandOptions& o) {
     return run_localization(o);
   }
   slam::SlamResult r;
-  try {
-    r = slam::run_icp_slam_full(o.job);
-    if (!o.save_map.empty()) slam::write_map_yaml(r.grid, o.save_map);
-    if (!o.odom_csv.empty()) io::write_trajectory_csv(o.odom_csv, r.odometry);
-    io::write_trajectory_csv(o.output, r.trajectory);
-  } catch (const std::exception& e) {
-    std::cerr << "dispel slam: " << e.what() << "\n";
+  const auto save_map = [&](const slam::SlamResult& result) {
+    if (!o.save_map.empty()) slam::write_map_yaml(result.grid, o.save_map);
+  };
+  if (!run_and_write(
+          o, r, [&] { return slam::run_icp_slam_full(o.job); }, save_map))
     return 1;
-  }
   const eval::TrajectoryPoint& last = r.trajectory.back();
   if (o.json) {
     nlohmann::ordered_json j = counters_json("slam", r);

@@ -29,11 +29,7 @@ GridMap small_map() {
   return m;
 }
 
-std::string write_text(const std::string& name, const std::string& text) {
-  const std::string path = temp_path(name);
-  std::ofstream(path, std::ios::binary) << text;
-  return path;
-}
+using test::write_text;
 
 std::string read_text(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -265,21 +265,10 @@ TEST(SlamIcp, InvalidBeamsNeitherFillNorClearGridCells) {
 // --- Bad input ----------------------------------------------------------------------------------
 
 void expect_error(const SlamOptions& o, const std::string& expected) {
-  try {
-    run_icp_slam(o);
-    ADD_FAILURE() << "accepted " << o.input;
-  } catch (const JobError& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find(expected), std::string::npos) << what;
-    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
-  }
+  room::expect_job_error([&] { run_icp_slam(o); }, expected, o.input);
 }
 
-std::string write_text(const std::string& name, const std::string& text) {
-  const std::string path = temp_path(name);
-  std::ofstream(path) << text;
-  return path;
-}
+using test::write_text;
 
 TEST(SlamIcpBadInput, MissingFileNotABagMissingTopics) {
   SlamOptions o;

@@ -254,21 +254,11 @@ TEST(SlamPfLocalization, GridOriginTurnedAgainstTheMapFrame) {
 // --- Bad input ----------------------------------------------------------------------------------
 
 void expect_error(const LocalizationOptions& o, const std::string& expected) {
-  try {
-    run_pf_localization(o);
-    ADD_FAILURE() << "accepted " << o.input << " with map " << o.map_yaml;
-  } catch (const JobError& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find(expected), std::string::npos) << what;
-    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
-  }
+  room::expect_job_error([&] { run_pf_localization(o); }, expected,
+                         o.input + " with map " + o.map_yaml);
 }
 
-std::string write_text(const std::string& name, const std::string& text) {
-  const std::string path = temp_path(name);
-  std::ofstream(path, std::ios::binary) << text;
-  return path;
-}
+using test::write_text;
 
 TEST(SlamPfLocalizationBadInput, BadMapsBagsAndOptions) {
   const SimRun run = write_bag("pf_bad.bag", {});

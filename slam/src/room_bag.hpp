@@ -3,6 +3,7 @@
 // a room, written with rosbag, with its true trajectory.
 
 #include <geometry_msgs/TransformStamped.h>
+#include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
 #include <sensor_msgs/LaserScan.h>
@@ -17,6 +18,7 @@
 
 #include "dispel/core/pose2.hpp"
 #include "dispel/eval/trajectory_error.hpp"
+#include "dispel/io/filter_job.hpp"
 #include "dispel/io/ros_convert.hpp"
 #include "dispel/sim/raycast.hpp"
 #include "test_files.hpp"
@@ -130,6 +132,20 @@ inline SimRun write_bag(const std::string& name, const BagOptions& opt) {
     run.truth.push_back({kStart + t, truth.x_m, truth.y_m, truth.yaw_rad});
   }
   return run;
+}
+
+// @p run must throw io::JobError with a one-line message containing @p expected; @p given names
+// the input in the failure message.
+template <typename Run>
+void expect_job_error(const Run& run, const std::string& expected, const std::string& given) {
+  try {
+    run();
+    ADD_FAILURE() << "accepted " << given;
+  } catch (const io::JobError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(expected), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
 }
 
 }  // namespace dispel::slam::room

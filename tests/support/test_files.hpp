@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <fstream>
 #include <string>
 
 namespace dispel::test {
@@ -14,6 +15,13 @@ inline std::string source_path(const std::string& relative) {
 
 /// A path in gtest's temporary folder.
 inline std::string temp_path(const std::string& name) { return ::testing::TempDir() + "/" + name; }
+
+/// A file with @p text (bytes as given) in gtest's temporary folder; its path.
+inline std::string write_text(const std::string& name, const std::string& text) {
+  const std::string path = temp_path(name);
+  std::ofstream(path, std::ios::binary) << text;
+  return path;
+}
 
 inline bool exists(const std::string& path) {
   struct stat st {};

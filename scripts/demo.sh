@@ -10,7 +10,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
-dispel=./build/apps/dispel
+dispel=./build/bin/dispel
 out=build/demo
 mkdir -p "$out"
 
@@ -19,7 +19,7 @@ table="$out/thesis_hall_table.txt"
 printf "%-36s %5s %12s %10s %15s\n" "configuration" "seed" "preservation" "rejection" "latency median" > "$table"
 for seed in 1 2 3; do
   $dispel sim config/scenarios/thesis_hall.yaml -o "$out/thesis_hall_$seed.bag" --seed "$seed"
-  for config in thesis_sensor thesis_original; do
+  for config in default_masked thesis_masked; do
     $dispel filter "$out/thesis_hall_$seed.bag" -o "$out/thesis_hall_${seed}_$config.bag" \
       --config "config/$config.yaml" --stats "$out/thesis_hall_${seed}_$config.json" > /dev/null
     $dispel eval --truth "$out/thesis_hall_$seed.bag" --result "$out/thesis_hall_${seed}_$config.bag" \
@@ -27,8 +27,8 @@ for seed in 1 2 3; do
     /usr/bin/python3 - "$out/thesis_hall_${seed}_${config}_eval.json" "$config" "$seed" >> "$table" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
-name = {"thesis_sensor": "dispel default (thesis_sensor.yaml)",
-        "thesis_original": "thesis (thesis_original.yaml)"}[sys.argv[2]]
+name = {"default_masked": "dispel default (default_masked.yaml)",
+        "thesis_masked": "thesis (thesis_masked.yaml)"}[sys.argv[2]]
 lat = r["detection_latency_s"]["median"]
 print("%-36s %5s %12.4f %10.4f %15s" % (name, sys.argv[3], r["preservation_rate"],
       r["rejection_rate"], "-" if lat is None else "%.2f s" % lat))

@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scenario=${1:-config/scenarios/odometry_lawnmower.yaml}
 seeds=${2:-5}
-dispel=./build/apps/dispel
+dispel=./build/bin/dispel
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 for seed in $(seq 1 "$seeds"); do

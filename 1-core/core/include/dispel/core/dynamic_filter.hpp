@@ -1,0 +1,220 @@
+#pragma once
+/// @file
+/// The dynamic object filter (thesis sections 3.2.1-3.2.4): segments each scan, follows the
+/// objects from scan to scan in a fixed frame, estimates their velocity and removes the beams of
+/// moving objects before SLAM sees the scan.
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "dispel/core/classification.hpp"
+#include "dispel/core/dynamic_filter_config.hpp"
+#include "dispel/core/free_space_map.hpp"
+#include "dispel/core/laser_scan.hpp"
+#include "dispel/core/pose2.hpp"
+#include "dispel/core/segmentation.hpp"
+#include "dispel/core/velocity_filter.hpp"
+
+namespace dispel {
+
+/// Per-beam labels of the filtered scan (docs/dynamic_filter.md, "Beam labels"); the values are
+/// what <scan>_labels carries in its intensities.
+enum class BeamLabel : std::uint8_t {
+  kStatic = 0,    ///< Part of a static object: kept.
+  kDynamic = 1,   ///< Part of a dynamic object: removed (NaN).
+  kUnknown = 2,   ///< Part of an object not yet classified (POG only): removed (NaN).
+  kNoObject = 3,  ///< Valid beam in no object (noise below N_min): kept.
+  kInvalid = 4,   ///< Invalid range or masked sector: untouched.
+};
+
+/// What the filter did with one scan.
+enum class FilterEvent : std::uint8_t {
+  kFiltered,            ///< Tracked and filtered normally.
+  kFirstScan,           ///< Filtered; no earlier scan, so no velocities yet.
+  kRejectedScan,        ///< The scan failed check_scan(): passed through unchanged.
+  kRejectedPose,        ///< The pose has NaN or infinite values: passed through unchanged.
+  kRepeatedStamp,       ///< Same stamp as the previous scan: labelled from the tracks as they
+                        ///< are, without updating them.
+  kResetTimeBackwards,  ///< The stamp is earlier than the previous one: tracks reset.
+  kResetTimeGap,        ///< More than max_time_gap_s since the previous scan: tracks reset.
+  kResetPoseJump,       ///< The sensor pose jumped: tracks reset.
+  kNoPose,              ///< No sensor pose was given (none known at the scan's time): passed
+                        ///< through unchanged.
+};
+inline constexpr std::size_t kFilterEventCount = 9;
+
+/// Stable short name of an event, e.g. "reset_time_backwards" (for counters and JSON keys).
+const char* filter_event_name(FilterEvent event);
+
+/// Running totals since the filter was made.
+struct FilterCounters {
+  std::int64_t scans = 0;                                         ///< Scans given to process().
+  std::array<std::int64_t, kFilterEventCount> events{};           ///< Scans per FilterEvent.
+  std::array<std::int64_t, kScanIssueCount> rejected_by_issue{};  ///< kRejectedScan by reason.
+  std::int64_t tracks_created = 0;
+  std::int64_t tracks_dropped = 0;  ///< Forgotten after max_missed_scans, or by a reset.
+  std::int64_t beams_removed_dynamic = 0;
+  std::int64_t beams_removed_unknown = 0;
+  /// Beams of dynamic tracks kept because they end where something has stood for a while
+  /// (free_space.keep_long_occupied).
+  std::int64_t beams_kept_long_occupied = 0;
+  /// Beams of no object removed as fragments of a dynamic track (tracking.fragment_distance_m);
+  /// included in beams_removed_dynamic.
+  std::int64_t beams_removed_fragments = 0;
+};
+
+/// A tracked object as reported to the caller. Positions and velocities are in the fixed frame.
+struct TrackedObject {
+  std::uint64_t id = 0;  ///< Unique for the life of the filter; 1, 2, ...
+  ObjectClass object_class = ObjectClass::kStatic;
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();    ///< Centroid estimate.
+  Eigen::Vector2d velocity_mps = Eigen::Vector2d::Zero();  ///< Centroid velocity estimate.
+  Eigen::Vector2d first_edge_m = Eigen::Vector2d::Zero();  ///< First edge point estimate.
+  Eigen::Vector2d last_edge_m = Eigen::Vector2d::Zero();   ///< Last edge point estimate.
+  double speed_mps = 0.0;  ///< Lowest of the three points' speeds (what is compared with L_v).
+  std::int32_t dynamic_weight = 0;
+  std::int32_t static_weight = 0;
+  std::int32_t age_scans = 0;     ///< Scans since the track started.
+  std::int32_t missed_scans = 0;  ///< Consecutive scans without a match (0 when seen now).
+  /// Index into this scan's Segmentation::objects, or -1 when not seen in this scan.
+  std::int32_t object_index = -1;
+};
+
+/// The result of filtering one scan.
+struct FilterResult {
+  FilterEvent event = FilterEvent::kFiltered;
+  /// The input scan with removed beams set to NaN (REP 117); unchanged when rejected.
+  LaserScan filtered;
+  /// One label per beam (empty only when the scan has no beams).
+  std::vector<BeamLabel> labels;
+  /// Every live track after this scan.
+  std::vector<TrackedObject> tracks;
+  /// The segmentation of this scan (empty when rejected).
+  Segmentation segmentation;
+  /// Beams removed in this scan.
+  std::int32_t removed_dynamic = 0;
+  std::int32_t removed_unknown = 0;
+};
+
+/// The dynamic object filter. Feed it scans in time order with the pose of the sensor in a fixed
+/// frame (e.g. odom) at each scan's time. Bad input never throws: it is rejected or causes a
+/// reset, and FilterResult::event and counters() say which. Not thread-safe.
+class DynamicFilter {
+ public:
+  /// @throws std::invalid_argument if config.validate() does.
+  explicit DynamicFilter(DynamicFilterConfig config);
+
+  /// Filters one scan (thesis Figure 3.3). @p sensor_pose is the laser frame in the fixed frame
+  /// at scan.stamp_s, or std::nullopt when none is known: the scan is then passed through
+  /// unchanged (FilterEvent::kNoPose) and the tracks wait for the next scan with a pose.
+  void process(const LaserScan& scan, const std::optional<Pose2>& sensor_pose, FilterResult& out);
+
+  FilterResult process(const LaserScan& scan, const std::optional<Pose2>& sensor_pose) {
+    FilterResult out;
+    process(scan, sensor_pose, out);
+    return out;
+  }
+
+  /// What process() gives for a scan it passes through unchanged with @p event (a rejection, no
+  /// pose): the scan as it is, every valid beam "no object" (every beam "invalid" when the scan
+  /// fails check_scan()), no tracks. For a caller that passes a scan through without a filter.
+  static void pass_through_unfiltered(const LaserScan& scan, FilterEvent event, FilterResult& out);
+
+  /// Forgets every track (as after a jump in time or pose).
+  void reset();
+
+  const DynamicFilterConfig& config() const { return config_; }
+  const FilterCounters& counters() const { return counters_; }
+  std::size_t track_count() const { return tracks_.size(); }
+
+ private:
+  // The three tracked points of an object: first edge, last edge, centroid.
+  static constexpr int kFirst = 0, kLast = 1, kCentroid = 2;
+
+  struct Observation {  // One segmented object, in the fixed frame.
+    std::array<Eigen::Vector2d, 3> points;
+    std::array<bool, 3> trusted;
+    bool ambiguous;  // Touches the field-of-view end or a masked sector.
+    double extent_m;
+    std::int32_t point_count;
+  };
+  struct Track {
+    std::uint64_t id;
+    std::array<PointVelocityFilter, 3> kf;
+    std::array<bool, 3> trusted;  // Whether each point was measured reliably in the last scan.
+    ClassState cls;
+    double last_seen_s;
+    std::int32_t age_scans;
+    std::int32_t missed_scans;
+    std::int32_t point_count;
+    double extent_m;
+    double speed_mps;
+    std::int32_t object_index;
+  };
+
+  // What the first step decides about a scan.
+  struct ScanCheck {
+    FilterEvent event = FilterEvent::kFiltered;
+    bool rejected = false;  // Passed through unchanged.
+    bool learn = true;      // Tracks are updated (false for a repeated stamp).
+  };
+
+  // The steps of process(), in order (thesis Figure 3.3).
+  ScanCheck check(const LaserScan& scan, const std::optional<Pose2>& sensor_pose);
+  void observe(const Segmentation& segmentation, const Pose2& sensor_pose, float range_max_m);
+  void match(double stamp_s);
+  void update_velocities(double stamp_s);
+  void classify(const LaserScan& scan, const Pose2& sensor_pose, const Segmentation& segmentation);
+  void label(const LaserScan& scan, const Pose2& sensor_pose, const ScanCheck& check,
+             FilterResult& out);
+
+  // Step 1.
+  void pass_through(const LaserScan& scan, FilterEvent event, FilterResult& out);
+  // Step 4 (track_matching.cpp).
+  void find_split_parents(double stamp_s);
+  void associate_nearest();
+  void associate_global(double stamp_s);
+  void rescue_by_edges(double stamp_s);
+  bool similar_extent(const Observation& obs, const Track& track) const;
+  // Steps 5 and 6.
+  void update_class(Track& track, const Observation& obs, double stamp_s);
+  void start_tracks(double stamp_s);
+  void mark_objects_in_free_space(const LaserScan& scan, const Pose2& sensor_pose,
+                                  const Segmentation& segmentation);
+  void spread_to_companions();
+  void forget_lost_tracks();
+  Track new_track(const Observation& obs, double stamp_s, std::int32_t object_index);
+  // Step 7.
+  BeamLabel beam_label(const LaserScan& scan, std::size_t b, std::int32_t segment_label,
+                       const Pose2& sensor_pose, bool learned);
+  bool near_dynamic_track(const Eigen::Vector2d& point_m, double stamp_s) const;
+  void write_tracks(FilterResult& out) const;
+
+  DynamicFilterConfig config_;
+  Segmenter segmenter_;
+  FilterCounters counters_;
+  std::vector<Track> tracks_;
+  FreeSpaceMap free_space_;
+  std::uint64_t next_id_ = 1;
+  bool have_previous_ = false;
+  double previous_stamp_s_ = 0.0;
+  Pose2 previous_pose_;
+
+  // Per scan, reused between scans: one entry per object of the segmentation.
+  std::vector<Observation> observations_;
+  std::vector<std::int32_t> track_of_object_;   // Step 4: the matched track, or -1.
+  std::vector<std::int32_t> parent_of_object_;  // Step 4: the track an unmatched object split from.
+  struct ObjectVerdict {  // Step 6: the class and speed of each object's track.
+    ObjectClass object_class;
+    double speed_mps;
+  };
+  std::vector<ObjectVerdict> verdicts_;
+  // Scratch of the global matching.
+  std::vector<double> cost_;
+  std::vector<std::int32_t> component_;
+};
+
+}  // namespace dispel

@@ -1,0 +1,506 @@
+// The dynamic filter's per-scan steps (thesis Figure 3.3): check, segment, observe, match, update
+// velocities, classify, label. Matching is in track_matching.cpp, the configuration in
+// dynamic_filter_config.cpp.
+#include "dispel/core/dynamic_filter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace dispel {
+namespace {
+
+bool finite_pose(const Pose2& p) {
+  return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.yaw_rad);
+}
+
+// Whether an edge is the object's own outline (thesis section 3.2.2 and Figure 3.6).
+bool edge_trusted(EdgeNeighbour n) {
+  return n == EdgeNeighbour::kFarther || n == EdgeNeighbour::kInvalid;
+}
+
+bool edge_at_view_limit(EdgeNeighbour n) {
+  return n == EdgeNeighbour::kFieldOfViewEnd || n == EdgeNeighbour::kMaskedSector;
+}
+
+// A track followed for longer than this without any sign of motion is known structure seen from
+// a new side (or merged with someone next to it), not something that just appeared in free space.
+constexpr std::int32_t kFreeSpaceMaxAge = 10;
+
+// Fragments are absorbed by dynamic tracks seen in this scan or missed for a few scans at most.
+constexpr std::int32_t kFragmentMaxMissed = 2;
+
+Eigen::Vector2d beam_point(const LaserScan& scan, std::size_t b, const Pose2& sensor_pose) {
+  const double r = scan.ranges_m[b];
+  const double bearing = scan.bearing_rad(b);
+  return sensor_pose.apply({r * std::cos(bearing), r * std::sin(bearing)});
+}
+
+}  // namespace
+
+const char* filter_event_name(FilterEvent event) {
+  switch (event) {
+    case FilterEvent::kFiltered:
+      return "filtered";
+    case FilterEvent::kFirstScan:
+      return "first_scan";
+    case FilterEvent::kRejectedScan:
+      return "rejected_scan";
+    case FilterEvent::kRejectedPose:
+      return "rejected_pose";
+    case FilterEvent::kRepeatedStamp:
+      return "repeated_stamp";
+    case FilterEvent::kResetTimeBackwards:
+      return "reset_time_backwards";
+    case FilterEvent::kResetTimeGap:
+      return "reset_time_gap";
+    case FilterEvent::kResetPoseJump:
+      return "reset_pose_jump";
+    case FilterEvent::kNoPose:
+      return "no_pose";
+  }
+  return "unknown";
+}
+
+DynamicFilter::DynamicFilter(DynamicFilterConfig config)
+    : config_((config.validate(), std::move(config))),
+      segmenter_(config_.segmentation),
+      free_space_(config_.free_space) {}
+
+void DynamicFilter::reset() {
+  counters_.tracks_dropped += static_cast<std::int64_t>(tracks_.size());
+  tracks_.clear();
+  free_space_.clear();
+  have_previous_ = false;
+}
+
+void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& sensor_pose,
+                            FilterResult& out) {
+  ++counters_.scans;
+  const ScanCheck checked = check(scan, sensor_pose);
+  if (checked.rejected) {
+    pass_through(scan, checked.event, out);
+    return;
+  }
+  const Pose2& pose = *sensor_pose;
+  segmenter_.segment(scan, out.segmentation);
+  observe(out.segmentation, pose, scan.range_max_m);
+  match(scan.stamp_s);
+  if (checked.learn) {
+    update_velocities(scan.stamp_s);
+    classify(scan, pose, out.segmentation);
+    previous_stamp_s_ = scan.stamp_s;
+    previous_pose_ = pose;
+    have_previous_ = true;
+  } else {
+    // A repeated stamp: no time has passed, so nothing can be learned; label from the tracks.
+    for (Track& t : tracks_) t.object_index = -1;
+    const ObjectClass fresh = initial_class_state(config_.classification).object_class;
+    verdicts_.resize(observations_.size());
+    for (std::size_t i = 0; i < observations_.size(); ++i) {
+      const std::int32_t t = track_of_object_[i];
+      verdicts_[i] = t >= 0 ? ObjectVerdict{tracks_[t].cls.object_class, tracks_[t].speed_mps}
+                            : ObjectVerdict{fresh, 0.0};
+      if (t >= 0) tracks_[t].object_index = static_cast<std::int32_t>(i);
+    }
+  }
+  label(scan, pose, checked, out);
+  ++counters_.events[static_cast<std::size_t>(checked.event)];
+}
+
+// Step 1: a scan or pose that cannot be used is passed through; a jump in time or pose resets the
+// tracks; a repeated stamp is labelled without learning.
+DynamicFilter::ScanCheck DynamicFilter::check(const LaserScan& scan,
+                                              const std::optional<Pose2>& sensor_pose) {
+  ScanCheck c;
+  const ScanIssue issue = check_scan(scan);
+  if (issue != ScanIssue::kNone) {
+    ++counters_.rejected_by_issue[static_cast<std::size_t>(issue)];
+    c.event = FilterEvent::kRejectedScan;
+  } else if (!sensor_pose) {
+    c.event = FilterEvent::kNoPose;
+  } else if (!finite_pose(*sensor_pose)) {
+    c.event = FilterEvent::kRejectedPose;
+  }
+  if (c.event != FilterEvent::kFiltered) {
+    c.rejected = true;
+    return c;
+  }
+  if (!have_previous_) {
+    c.event = FilterEvent::kFirstScan;
+    return c;
+  }
+  const double dt = scan.stamp_s - previous_stamp_s_;
+  const double moved = (sensor_pose->translation() - previous_pose_.translation()).norm();
+  const double turned = std::abs(wrap_angle(sensor_pose->yaw_rad - previous_pose_.yaw_rad));
+  if (dt < 0.0) {
+    reset();
+    c.event = FilterEvent::kResetTimeBackwards;
+  } else if (dt == 0.0) {
+    c.event = FilterEvent::kRepeatedStamp;
+    c.learn = false;
+  } else if (dt > config_.max_time_gap_s) {
+    reset();
+    c.event = FilterEvent::kResetTimeGap;
+  } else if (moved > config_.max_pose_jump_m || turned > config_.max_pose_jump_rad) {
+    reset();
+    c.event = FilterEvent::kResetPoseJump;
+  }
+  return c;
+}
+
+void DynamicFilter::pass_through_unfiltered(const LaserScan& scan, FilterEvent event,
+                                            FilterResult& out) {
+  out.event = event;
+  out.filtered = scan;
+  out.segmentation = Segmentation{};
+  out.segmentation.issue = check_scan(scan);
+  out.removed_dynamic = out.removed_unknown = 0;
+  const bool usable_limits = out.segmentation.issue == ScanIssue::kNone;
+  out.labels.resize(scan.size());
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    out.labels[i] = usable_limits && scan.is_valid(i) ? BeamLabel::kNoObject : BeamLabel::kInvalid;
+  }
+  out.tracks.clear();
+}
+
+void DynamicFilter::pass_through(const LaserScan& scan, FilterEvent event, FilterResult& out) {
+  pass_through_unfiltered(scan, event, out);
+  for (Track& t : tracks_) t.object_index = -1;
+  write_tracks(out);
+  ++counters_.events[static_cast<std::size_t>(event)];
+}
+
+// Step 3: each object's first edge, last edge and centroid in the fixed frame, and whether each
+// is the object's true outline (trusted) or may be cut off.
+void DynamicFilter::observe(const Segmentation& segmentation, const Pose2& sensor_pose,
+                            float range_max_m) {
+  const std::vector<ScanObject>& objects = segmentation.objects;
+  observations_.resize(objects.size());
+  // An edge beside a beam with no return, at the end of the scanner's range, may continue beyond
+  // it: as the robot moves, it slides along the object like a view limit.
+  const double range_edge =
+      static_cast<double>(range_max_m) - 2.0 * config_.segmentation.cluster_gap_m;
+  const auto at_range_limit = [&](EdgeNeighbour n, const Eigen::Vector2d& p) {
+    return n == EdgeNeighbour::kInvalid && p.norm() > range_edge;
+  };
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const ScanObject& o = objects[i];
+    Observation& obs = observations_[i];
+    obs.points[kFirst] = sensor_pose.apply(o.first_point_m);
+    obs.points[kLast] = sensor_pose.apply(o.last_point_m);
+    obs.points[kCentroid] = sensor_pose.apply(o.centroid_m);
+    obs.trusted[kFirst] =
+        edge_trusted(o.before_first) && !at_range_limit(o.before_first, o.first_point_m);
+    obs.trusted[kLast] =
+        edge_trusted(o.after_last) && !at_range_limit(o.after_last, o.last_point_m);
+    // A hidden part of the outline shifts the centroid as well.
+    obs.trusted[kCentroid] = obs.trusted[kFirst] && obs.trusted[kLast];
+    obs.ambiguous = edge_at_view_limit(o.before_first) || edge_at_view_limit(o.after_last);
+    obs.extent_m = (o.last_point_m - o.first_point_m).norm();
+    obs.point_count = o.point_count;
+  }
+}
+
+// Step 5: the point velocity filters of every matched track (thesis Eq. 3.4-3.5); tracks not seen
+// grow older.
+void DynamicFilter::update_velocities(double stamp_s) {
+  for (Track& t : tracks_) t.object_index = -1;
+  for (std::size_t i = 0; i < observations_.size(); ++i) {
+    const std::int32_t index = track_of_object_[i];
+    if (index < 0) continue;
+    Track& track = tracks_[index];
+    const Observation& obs = observations_[i];
+    const double dt = stamp_s - track.last_seen_s;
+    // At the field-of-view end or a masked sector the whole object is ambiguous: its apparent
+    // motion may be it entering or leaving the view, so its velocity decays (thesis 3.2.2). An
+    // edge hidden behind something nearer (and the centroid with it) holds its velocity instead,
+    // and its position follows the measurement: the occluder's motion is not learned, a walker
+    // passing behind another keeps its motion, and a wall whose visible part changes stays where
+    // it is seen. The first scan in which such a point is trusted again re-anchors it the same
+    // way, so that the jump back to the true outline is not taken for motion either.
+    double speed = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      PointVelocityFilter& kf = track.kf[k];
+      if (obs.ambiguous) {
+        kf.predict_and_decay(obs.points[k], dt, config_.velocity);
+      } else if (!obs.trusted[k] || !track.trusted[k]) {
+        kf.predict_and_hold(obs.points[k], dt, config_.velocity);
+      } else {
+        kf.predict_and_update(obs.points[k], dt, config_.velocity);
+      }
+      track.trusted[k] = obs.trusted[k] && !obs.ambiguous;
+      // Speed is the lowest of the three points' speeds (thesis 3.2.4).
+      speed = std::min(speed, kf.velocity().norm());
+    }
+    track.speed_mps = speed;
+    track.object_index = static_cast<std::int32_t>(i);
+  }
+  for (Track& t : tracks_) {
+    if (t.object_index < 0) {
+      ++t.missed_scans;
+      ++t.age_scans;
+    }
+  }
+}
+
+// Step 6: each matched track's motion evidence and class (thesis 3.2.4); new tracks for the other
+// objects; beyond the thesis, objects in space seen free and the companions of dynamic tracks;
+// then every object's verdict, and tracks unseen for too long are forgotten.
+void DynamicFilter::classify(const LaserScan& scan, const Pose2& sensor_pose,
+                             const Segmentation& segmentation) {
+  for (std::size_t i = 0; i < observations_.size(); ++i) {
+    if (track_of_object_[i] >= 0) {
+      update_class(tracks_[track_of_object_[i]], observations_[i], scan.stamp_s);
+    }
+  }
+  start_tracks(scan.stamp_s);
+  if (config_.free_space.enabled) {
+    mark_objects_in_free_space(scan, sensor_pose, segmentation);
+    free_space_.add_scan(scan, sensor_pose);
+  }
+  spread_to_companions();
+  verdicts_.resize(observations_.size());
+  for (std::size_t i = 0; i < observations_.size(); ++i) {
+    const Track& t = tracks_[track_of_object_[i]];
+    verdicts_[i] = {t.cls.object_class, t.speed_mps};
+  }
+  forget_lost_tracks();
+}
+
+void DynamicFilter::update_class(Track& track, const Observation& obs, double stamp_s) {
+  const ClassificationConfig& cc = config_.classification;
+  const double ratio =
+      static_cast<double>(std::max(obs.point_count, track.point_count)) /
+      static_cast<double>(std::max(1, std::min(obs.point_count, track.point_count)));
+  MotionEvidence evidence = MotionEvidence::kFast;
+  if (track.speed_mps <= cc.speed_limit_mps) {
+    evidence = MotionEvidence::kSlow;
+  } else if (ratio > cc.max_point_count_ratio) {
+    evidence = MotionEvidence::kNone;  // Size jump (merge, split, occlusion): motion unreliable.
+  } else if (obs.ambiguous || obs.extent_m > cc.max_dynamic_extent_m) {
+    evidence = MotionEvidence::kNone;
+  } else {
+    const double cos_limit = std::cos(cc.max_direction_difference_rad);
+    for (int a = 0; a < 3 && evidence == MotionEvidence::kFast; ++a) {
+      for (int b = a + 1; b < 3; ++b) {
+        const Eigen::Vector2d va = track.kf[a].velocity(), vb = track.kf[b].velocity();
+        if (va.dot(vb) < cos_limit * va.norm() * vb.norm()) {
+          evidence = MotionEvidence::kNone;  // The points disagree: not a rigid motion.
+          break;
+        }
+      }
+    }
+  }
+  track.cls = update_class_state(track.cls, evidence, cc);
+  track.point_count = obs.point_count;
+  // A dynamic object keeps the extent it had when it became dynamic: people and vehicles do not
+  // grow, so its track cannot creep onto a wall the person stood next to.
+  if (track.cls.object_class != ObjectClass::kDynamic) track.extent_m = obs.extent_m;
+  track.last_seen_s = stamp_s;
+  track.missed_scans = 0;
+  ++track.age_scans;
+}
+
+// A track for every object that matched none; one that split from a track (see
+// find_split_parents) continues it: its class, weights, age and velocity.
+void DynamicFilter::start_tracks(double stamp_s) {
+  for (std::size_t i = 0; i < observations_.size(); ++i) {
+    if (track_of_object_[i] >= 0) continue;
+    Track track = new_track(observations_[i], stamp_s, static_cast<std::int32_t>(i));
+    if (parent_of_object_[i] >= 0) {
+      const Track& from = tracks_[parent_of_object_[i]];
+      track.cls = from.cls;
+      track.age_scans = from.age_scans;
+      for (PointVelocityFilter& kf : track.kf) kf.set_velocity(from.kf[kCentroid].velocity());
+      track.speed_mps = from.speed_mps;
+    }
+    track_of_object_[i] = static_cast<std::int32_t>(tracks_.size());
+    tracks_.push_back(std::move(track));
+  }
+}
+
+DynamicFilter::Track DynamicFilter::new_track(const Observation& obs, double stamp_s,
+                                              std::int32_t object_index) {
+  Track t;
+  t.id = next_id_++;
+  for (int k = 0; k < 3; ++k) {
+    t.kf[k] = PointVelocityFilter(obs.points[k], config_.velocity);
+    t.trusted[k] = obs.trusted[k] && !obs.ambiguous;
+  }
+  t.cls = initial_class_state(config_.classification);
+  t.last_seen_s = stamp_s;
+  t.age_scans = 1;
+  t.missed_scans = 0;
+  t.point_count = obs.point_count;
+  t.extent_m = obs.extent_m;
+  t.speed_mps = 0.0;
+  t.object_index = object_index;
+  ++counters_.tracks_created;
+  return t;
+}
+
+// An object most of whose points stand where beams passed freely before (and not as far as the
+// map knows, hit since) has moved there: it is dynamic at once, unless it is too large to be.
+void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan, const Pose2& sensor_pose,
+                                               const Segmentation& segmentation) {
+  std::vector<std::int32_t> in_free(segmentation.objects.size(), 0);
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    const std::int32_t o = segmentation.beam_labels[b];
+    if (o < 0) continue;
+    if (free_space_.known_free(beam_point(scan, b, sensor_pose))) {
+      ++in_free[static_cast<std::size_t>(o)];
+    }
+  }
+  for (std::size_t i = 0; i < segmentation.objects.size(); ++i) {
+    const ScanObject& o = segmentation.objects[i];
+    if (static_cast<double>(in_free[i]) < config_.free_space.min_object_share * o.point_count)
+      continue;
+    if ((o.last_point_m - o.first_point_m).norm() > config_.classification.max_dynamic_extent_m) {
+      continue;
+    }
+    Track& t = tracks_[static_cast<std::size_t>(track_of_object_[i])];
+    if (t.age_scans > kFreeSpaceMaxAge) continue;
+    if (t.cls.object_class != ObjectClass::kDynamic) {
+      t.cls.object_class = ObjectClass::kDynamic;
+      t.cls.dynamic_weight =
+          std::max(t.cls.dynamic_weight, config_.classification.dynamic_weight_limit);
+      t.cls.still_scans = 0;
+    }
+  }
+}
+
+// Two tracks seen in this scan that are close together and move alike are parts of one thing
+// (the two legs of a walker, tracked apart when one is behind the other): once one is dynamic,
+// so is the other, instead of it collecting L_d scans of its own.
+void DynamicFilter::spread_to_companions() {
+  const TrackingConfig& tc = config_.tracking;
+  if (!(tc.companion_distance_m > 0.0)) return;
+  const double limit = config_.classification.speed_limit_mps;
+  for (const Track& a : tracks_) {
+    if (a.object_index < 0 || a.cls.object_class != ObjectClass::kDynamic) continue;
+    const Eigen::Vector2d pa = a.kf[kCentroid].position();
+    const Eigen::Vector2d va = a.kf[kCentroid].velocity();
+    for (Track& b : tracks_) {
+      if (b.object_index < 0 || b.cls.object_class == ObjectClass::kDynamic) continue;
+      const Eigen::Vector2d vb = b.kf[kCentroid].velocity();
+      if (b.speed_mps > 3.0 * limit && b.cls.dynamic_weight > 0 &&
+          (b.kf[kCentroid].position() - pa).norm() <= tc.companion_distance_m &&
+          (vb - va).norm() <= tc.companion_speed_difference_mps) {
+        b.cls.object_class = ObjectClass::kDynamic;
+        b.cls.dynamic_weight = std::max(b.cls.dynamic_weight, a.cls.dynamic_weight);
+        b.cls.still_scans = 0;
+      }
+    }
+  }
+}
+
+void DynamicFilter::forget_lost_tracks() {
+  const auto lost = [&](const Track& t) {
+    return t.missed_scans > config_.tracking.max_missed_scans;
+  };
+  const auto before = tracks_.size();
+  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(), lost), tracks_.end());
+  counters_.tracks_dropped += static_cast<std::int64_t>(before - tracks_.size());
+}
+
+// Step 7: one label per beam from its object's verdict; the beams of dynamic and unknown objects
+// become NaN.
+void DynamicFilter::label(const LaserScan& scan, const Pose2& sensor_pose, const ScanCheck& check,
+                          FilterResult& out) {
+  out.event = check.event;
+  out.filtered = scan;
+  out.labels.resize(scan.size());
+  out.removed_dynamic = out.removed_unknown = 0;
+  const std::vector<std::int32_t>& segment_labels = out.segmentation.beam_labels;
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    const std::int32_t l = segment_labels[b];
+    BeamLabel label = BeamLabel::kInvalid;
+    if (l >= 0 || l == kLabelNoise) label = beam_label(scan, b, l, sensor_pose, check.learn);
+    if (label == BeamLabel::kDynamic) {
+      ++out.removed_dynamic;
+      out.filtered.ranges_m[b] = std::numeric_limits<float>::quiet_NaN();
+    } else if (label == BeamLabel::kUnknown) {
+      ++out.removed_unknown;
+      out.filtered.ranges_m[b] = std::numeric_limits<float>::quiet_NaN();
+    }
+    out.labels[b] = label;
+  }
+  counters_.beams_removed_dynamic += out.removed_dynamic;
+  counters_.beams_removed_unknown += out.removed_unknown;
+  write_tracks(out);
+}
+
+// The label of valid beam @p b of object @p segment_label (or of no object: kLabelNoise). Beyond
+// the thesis: a beam of no object beside a dynamic track is one of its fragments; a beam of a
+// moving object that ends where something has stood for a while is kept. The beam's point is
+// computed only when one of those rules needs it.
+BeamLabel DynamicFilter::beam_label(const LaserScan& scan, std::size_t b,
+                                    std::int32_t segment_label, const Pose2& sensor_pose,
+                                    bool learned) {
+  const FreeSpaceConfig& fs = config_.free_space;
+  const bool check_occupied = learned && fs.enabled && fs.keep_long_occupied;
+  if (segment_label == kLabelNoise) {
+    if (!learned || !(config_.tracking.fragment_distance_m > 0.0)) return BeamLabel::kNoObject;
+    const Eigen::Vector2d point = beam_point(scan, b, sensor_pose);
+    if (near_dynamic_track(point, scan.stamp_s) &&
+        !(check_occupied && free_space_.hit_balance(point) >= fs.max_recent_hits)) {
+      ++counters_.beams_removed_fragments;
+      return BeamLabel::kDynamic;
+    }
+    return BeamLabel::kNoObject;
+  }
+  const ObjectVerdict& v = verdicts_[static_cast<std::size_t>(segment_label)];
+  if (v.object_class == ObjectClass::kStatic) return BeamLabel::kStatic;
+  if (check_occupied) {
+    const Eigen::Vector2d point = beam_point(scan, b, sensor_pose);
+    const bool slow = v.speed_mps <= 2.0 * config_.classification.speed_limit_mps;
+    if (slow ? free_space_.hit_balance(point) >= fs.max_recent_hits
+             : free_space_.occupied_scans(point) >= fs.long_occupied_scans) {
+      ++counters_.beams_kept_long_occupied;
+      return BeamLabel::kStatic;
+    }
+  }
+  return v.object_class == ObjectClass::kDynamic ? BeamLabel::kDynamic : BeamLabel::kUnknown;
+}
+
+// Whether a point lies within fragment_distance_m of the outline (edge to edge, predicted to now)
+// of a dynamic track seen in this scan or missed for a few scans at most.
+bool DynamicFilter::near_dynamic_track(const Eigen::Vector2d& point_m, double stamp_s) const {
+  const double limit = config_.tracking.fragment_distance_m;
+  for (const Track& t : tracks_) {
+    if (t.cls.object_class != ObjectClass::kDynamic || t.missed_scans > kFragmentMaxMissed) {
+      continue;
+    }
+    const double dt = stamp_s - t.last_seen_s;
+    const Eigen::Vector2d a = t.kf[kFirst].predicted_position(dt);
+    const Eigen::Vector2d ab = t.kf[kLast].predicted_position(dt) - a;
+    const double len2 = ab.squaredNorm();
+    const double u = len2 > 0.0 ? std::clamp((point_m - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    if ((point_m - (a + u * ab)).norm() <= limit) return true;
+  }
+  return false;
+}
+
+void DynamicFilter::write_tracks(FilterResult& out) const {
+  out.tracks.resize(tracks_.size());
+  for (std::size_t i = 0; i < tracks_.size(); ++i) {
+    const Track& t = tracks_[i];
+    TrackedObject& o = out.tracks[i];
+    o.id = t.id;
+    o.object_class = t.cls.object_class;
+    o.position_m = t.kf[kCentroid].position();
+    o.velocity_mps = t.kf[kCentroid].velocity();
+    o.first_edge_m = t.kf[kFirst].position();
+    o.last_edge_m = t.kf[kLast].position();
+    o.speed_mps = t.speed_mps;
+    o.dynamic_weight = t.cls.dynamic_weight;
+    o.static_weight = t.cls.static_weight;
+    o.age_scans = t.age_scans;
+    o.missed_scans = t.missed_scans;
+    o.object_index = t.object_index;
+  }
+}
+
+}  // namespace dispel

@@ -1,0 +1,208 @@
+#pragma once
+/// @file
+/// A recording as dispel sees it, whatever its format: topics of messages in time order, the few
+/// message types dispel reads and writes in a form of its own, and the interfaces a format
+/// implements to be read (RecordingReader) and written (RecordingWriter). ROS 1 bags implement
+/// them in dispel::io_ros1_bags; a new format plugs in the same way (docs/architecture.md).
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dispel/core/dynamic_filter.hpp"
+#include "dispel/core/laser_scan.hpp"
+#include "dispel/core/pose2.hpp"
+
+namespace dispel::io {
+
+/// A time stamp as recordings keep it: whole seconds and nanoseconds, exactly.
+struct Stamp {
+  std::int64_t sec = 0;
+  std::uint32_t nsec = 0;  ///< In [0, 1e9).
+
+  double seconds() const { return static_cast<double>(sec) + 1e-9 * static_cast<double>(nsec); }
+  bool is_zero() const { return sec == 0 && nsec == 0; }
+  /// The stamp nearest to @p seconds (rounded to the nanosecond).
+  static Stamp from_seconds(double seconds);
+
+  bool operator==(const Stamp& o) const { return sec == o.sec && nsec == o.nsec; }
+  bool operator!=(const Stamp& o) const { return !(*this == o); }
+  bool operator<(const Stamp& o) const { return sec < o.sec || (sec == o.sec && nsec < o.nsec); }
+};
+
+struct Header {
+  std::uint32_t seq = 0;
+  Stamp stamp;
+  std::string frame_id;
+};
+
+/// sensor_msgs/LaserScan: the core's scan (stamp in seconds) and the fields it does not keep.
+struct ScanMessage {
+  Header header;
+  LaserScan scan;  ///< scan.stamp_s is header.stamp in seconds.
+  float angle_max = 0.0F;
+  float time_increment = 0.0F;
+  float scan_time = 0.0F;  ///< The period the scanner states; 0 when it states none.
+};
+
+/// nav_msgs/Odometry, its planar part: the pose of child_frame_id in header.frame_id.
+struct OdometryMessage {
+  Header header;
+  std::string child_frame_id;
+  Pose2 pose;
+  double v_mps = 0.0;     ///< twist.linear.x
+  double w_radps = 0.0;   ///< twist.angular.z
+};
+
+/// One transform of tf2_msgs/TFMessage, its planar part.
+struct FrameTransform {
+  Stamp stamp;
+  std::string parent;
+  std::string child;
+  Pose2 child_in_parent;
+};
+
+/// tf2_msgs/TFMessage.
+struct TransformsMessage {
+  std::vector<FrameTransform> transforms;
+};
+
+/// sensor_msgs/JointState.
+struct JointStateMessage {
+  Header header;
+  std::vector<std::string> names;
+  std::vector<double> positions;
+  std::vector<double> velocities;
+};
+
+/// sensor_msgs/Imu: what dispel uses of it.
+struct ImuMessage {
+  Header header;
+  Eigen::Vector3d angular_velocity_radps = Eigen::Vector3d::Zero();
+  bool has_orientation = false;  ///< false: orientation_covariance[0] = -1 (REP 145).
+};
+
+/// sensor_msgs/NavSatFix: what dispel uses of it.
+struct NavSatFixMessage {
+  Header header;
+  int status = -1;  ///< -1 no fix, 0 fix, 1 SBAS, 2 GBAS (sensor_msgs/NavSatStatus).
+  double latitude_deg = 0.0;
+  double longitude_deg = 0.0;
+};
+
+/// The message types dispel understands; every other one is kOther (copied, never decoded).
+enum class MessageKind : std::uint8_t {
+  kLaserScan,
+  kOdometry,
+  kTransforms,
+  kJointState,
+  kImu,
+  kNavSatFix,
+  kOther,
+};
+
+/// The type's name in messages to the user, e.g. "sensor_msgs/LaserScan".
+const char* message_kind_name(MessageKind kind);
+
+/// A topic of a recording.
+struct TopicInfo {
+  std::string type;  ///< As the format names it ("sensor_msgs/LaserScan").
+  MessageKind kind = MessageKind::kOther;
+  std::int64_t messages = 0;
+};
+
+/// The topics of a recording by name, with questions the commands ask of them.
+class Topics {
+ public:
+  Topics() = default;
+  explicit Topics(std::map<std::string, TopicInfo> topics) : topics_(std::move(topics)) {}
+
+  bool has(const std::string& topic) const { return topics_.count(topic) != 0; }
+  bool has(const std::string& topic, MessageKind kind) const;
+  /// The topics of @p kind, in name order.
+  std::vector<std::string> of_kind(MessageKind kind) const;
+  /// The same as "a, b, c", or "none": for error messages.
+  std::string list(MessageKind kind) const;
+  std::int64_t messages(const std::string& topic) const;
+  const std::map<std::string, TopicInfo>& all() const { return topics_; }
+
+ private:
+  std::map<std::string, TopicInfo> topics_;
+};
+
+/// "a, b, c" of @p names, or "none".
+std::string join_names(const std::vector<std::string>& names);
+
+/// One message of a recording, as its reader holds it; decoded on request. Valid only during the
+/// visit that gives it.
+class RecordedMessage {
+ public:
+  virtual ~RecordedMessage() = default;
+  virtual const std::string& topic() const = 0;
+  virtual MessageKind kind() const = 0;
+  /// When the recording received it.
+  virtual Stamp time() const = 0;
+  /// The message decoded, or std::nullopt when it is of another kind. @throws InputError naming
+  /// the recording when it cannot be decoded (a truncated or corrupt file).
+  virtual std::optional<ScanMessage> scan() const = 0;
+  virtual std::optional<OdometryMessage> odometry() const = 0;
+  virtual std::optional<TransformsMessage> transforms() const = 0;
+  virtual std::optional<JointStateMessage> joint_state() const = 0;
+  virtual std::optional<ImuMessage> imu() const = 0;
+  virtual std::optional<NavSatFixMessage> nav_sat_fix() const = 0;
+};
+
+/// Thrown by a visitor of RecordingReader::read() to stop reading there: read() returns.
+struct StopReading {};
+
+/// A recording opened for reading.
+class RecordingReader {
+ public:
+  virtual ~RecordingReader() = default;
+  virtual const std::string& path() const = 0;
+  /// "ROS 1 bag", for messages and statistics.
+  virtual std::string format_name() const = 0;
+  virtual const Topics& topics() const = 0;
+  /// The receive times of the first and last message (both zero when there are none).
+  virtual Stamp begin_time() const = 0;
+  virtual Stamp end_time() const = 0;
+  /// Calls @p visit for every message on @p topics (every topic when empty), in time order, until
+  /// it throws StopReading. @throws InputError naming the recording when it cannot be read;
+  /// whatever else @p visit throws goes through unchanged.
+  virtual void read(const std::vector<std::string>& topics,
+                    const std::function<void(const RecordedMessage&)>& visit) = 0;
+};
+
+/// A recording being written. Nothing appears under its name until finish() succeeds.
+class RecordingWriter {
+ public:
+  virtual ~RecordingWriter() = default;
+  /// Writes @p message unchanged (its bytes, type and metadata). It must come from a reader of
+  /// the same format. @throws OutputError
+  virtual void copy(const RecordedMessage& message) = 0;
+  /// Writes a message at @p time. @throws OutputError
+  virtual void write(const std::string& topic, Stamp time, const ScanMessage& message) = 0;
+  virtual void write(const std::string& topic, Stamp time, const OdometryMessage& message) = 0;
+  virtual void write(const std::string& topic, Stamp time, const TransformsMessage& message) = 0;
+  virtual void write(const std::string& topic, Stamp time, const JointStateMessage& message) = 0;
+  virtual void write(const std::string& topic, Stamp time, const ImuMessage& message) = 0;
+  /// Completes the file and moves it into place. @throws OutputError
+  virtual void finish() = 0;
+  std::int64_t messages_written() const { return written_; }
+
+ protected:
+  std::int64_t written_ = 0;
+};
+
+/// The message written on <scan topic>_filtered: @p original with the filtered ranges (removed
+/// beams NaN).
+ScanMessage filtered_message(const ScanMessage& original, const FilterResult& result);
+/// The message written on <scan topic>_labels: @p original whose intensities are the beam labels
+/// (BeamLabel's values; a beam without one is labelled invalid).
+ScanMessage labels_message(const ScanMessage& original, const FilterResult& result);
+
+}  // namespace dispel::io

@@ -1,0 +1,176 @@
+#include "dispel/io/config_yaml.hpp"
+
+#include <gtest/gtest.h>
+
+#include <set>
+#include <string>
+
+namespace dispel::io {
+namespace {
+
+std::string default_yaml() { return std::string(DISPEL_SOURCE_DIR) + "/config/default.yaml"; }
+
+void expect_error(const std::string& yaml, const std::string& expected) {
+  try {
+    parse_filter_config(yaml, "test.yaml");
+    ADD_FAILURE() << "accepted: " << yaml;
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("test.yaml: "), std::string::npos) << what;
+    EXPECT_NE(what.find(expected), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << "not one line: " << what;
+  }
+}
+
+// Every field of two configurations is equal.
+void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d) {
+  EXPECT_EQ(loaded.segmentation.cluster_gap_m, d.segmentation.cluster_gap_m);
+  EXPECT_EQ(loaded.segmentation.min_points, d.segmentation.min_points);
+  EXPECT_EQ(loaded.segmentation.gap_metric, d.segmentation.gap_metric);
+  EXPECT_EQ(loaded.segmentation.masked_sectors.size(), d.segmentation.masked_sectors.size());
+  EXPECT_EQ(loaded.tracking.match_distance_m, d.tracking.match_distance_m);
+  EXPECT_EQ(loaded.tracking.matching, d.tracking.matching);
+  EXPECT_EQ(loaded.tracking.max_missed_scans, d.tracking.max_missed_scans);
+  EXPECT_EQ(loaded.tracking.max_gate_m, d.tracking.max_gate_m);
+  EXPECT_EQ(loaded.tracking.max_extent_change_m, d.tracking.max_extent_change_m);
+  EXPECT_EQ(loaded.tracking.companion_distance_m, d.tracking.companion_distance_m);
+  EXPECT_EQ(loaded.tracking.fragment_distance_m, d.tracking.fragment_distance_m);
+  EXPECT_EQ(loaded.tracking.inherit_on_split, d.tracking.inherit_on_split);
+  EXPECT_EQ(loaded.tracking.companion_speed_difference_mps,
+            d.tracking.companion_speed_difference_mps);
+  EXPECT_EQ(loaded.velocity.position_variance_m2, d.velocity.position_variance_m2);
+  EXPECT_EQ(loaded.velocity.velocity_variance_m2ps2, d.velocity.velocity_variance_m2ps2);
+  EXPECT_EQ(loaded.velocity.measurement_variance_m2, d.velocity.measurement_variance_m2);
+  EXPECT_EQ(loaded.velocity.velocity_decay, d.velocity.velocity_decay);
+  EXPECT_EQ(loaded.velocity.nominal_scan_period_s, d.velocity.nominal_scan_period_s);
+  EXPECT_EQ(loaded.classification.presumption, d.classification.presumption);
+  EXPECT_EQ(loaded.classification.speed_limit_mps, d.classification.speed_limit_mps);
+  EXPECT_EQ(loaded.classification.dynamic_weight_limit, d.classification.dynamic_weight_limit);
+  EXPECT_EQ(loaded.classification.static_weight_limit, d.classification.static_weight_limit);
+  EXPECT_DOUBLE_EQ(loaded.classification.max_direction_difference_rad,
+                   d.classification.max_direction_difference_rad);
+  EXPECT_EQ(loaded.classification.max_dynamic_extent_m, d.classification.max_dynamic_extent_m);
+  EXPECT_EQ(loaded.classification.max_point_count_ratio, d.classification.max_point_count_ratio);
+  EXPECT_EQ(loaded.classification.still_scans_to_static, d.classification.still_scans_to_static);
+  EXPECT_EQ(loaded.classification.slow_scans_reduce_dynamic_weight,
+            d.classification.slow_scans_reduce_dynamic_weight);
+  EXPECT_EQ(loaded.free_space.enabled, d.free_space.enabled);
+  EXPECT_EQ(loaded.free_space.cell_size_m, d.free_space.cell_size_m);
+  EXPECT_EQ(loaded.free_space.extent_m, d.free_space.extent_m);
+  EXPECT_EQ(loaded.free_space.margin_m, d.free_space.margin_m);
+  EXPECT_EQ(loaded.free_space.min_free_observations, d.free_space.min_free_observations);
+  EXPECT_EQ(loaded.free_space.free_range_m, d.free_space.free_range_m);
+  EXPECT_EQ(loaded.free_space.no_return_is_free, d.free_space.no_return_is_free);
+  EXPECT_EQ(loaded.free_space.max_recent_hits, d.free_space.max_recent_hits);
+  EXPECT_EQ(loaded.free_space.memory_s, d.free_space.memory_s);
+  EXPECT_EQ(loaded.free_space.keep_long_occupied, d.free_space.keep_long_occupied);
+  EXPECT_EQ(loaded.free_space.long_occupied_scans, d.free_space.long_occupied_scans);
+  EXPECT_EQ(loaded.free_space.neighbourhood_cells, d.free_space.neighbourhood_cells);
+  EXPECT_EQ(loaded.free_space.min_object_share, d.free_space.min_object_share);
+  EXPECT_EQ(loaded.max_time_gap_s, d.max_time_gap_s);
+  EXPECT_EQ(loaded.max_pose_jump_m, d.max_pose_jump_m);
+  EXPECT_EQ(loaded.max_pose_jump_rad, d.max_pose_jump_rad);
+}
+
+TEST(ConfigYaml, ShippedDefaultFileHoldsExactlyTheDefaults) {
+  expect_same(load_filter_config(default_yaml()), DynamicFilterConfig{});
+  expect_same(parse_filter_config("", "empty.yaml"), DynamicFilterConfig{});
+}
+
+TEST(ConfigYaml, ShippedThesisFileHoldsExactlyTheThesisParameters) {
+  expect_same(load_filter_config(std::string(DISPEL_SOURCE_DIR) + "/config/thesis.yaml"),
+              thesis_config());
+  const DynamicFilterConfig t = thesis_config();
+  EXPECT_EQ(t.classification.dynamic_weight_limit, 18);
+  EXPECT_EQ(t.velocity.measurement_variance_m2, 15.0);
+  EXPECT_FALSE(t.free_space.enabled);
+  EXPECT_EQ(t.tracking.companion_distance_m, 0.0);
+  EXPECT_EQ(t.tracking.fragment_distance_m, 0.0);
+  // The thesis's rules, not dispel's.
+  EXPECT_EQ(t.tracking.matching, Matching::kNearestNeighbour);
+  EXPECT_FALSE(t.tracking.inherit_on_split);
+  EXPECT_EQ(t.segmentation.gap_metric, GapMetric::kRangeDifference);
+  EXPECT_FALSE(t.classification.slow_scans_reduce_dynamic_weight);
+  EXPECT_EQ(t.classification.still_scans_to_static, 0);
+}
+
+TEST(ConfigYaml, ShippedMaskedFilesAreTheirPresetsWithTheThesisScannersSectors) {
+  const std::string dir = std::string(DISPEL_SOURCE_DIR) + "/config/";
+  for (const auto& [file, preset] :
+       {std::pair<std::string, DynamicFilterConfig>{"default_masked.yaml", DynamicFilterConfig{}},
+        {"thesis_masked.yaml", thesis_config()}}) {
+    DynamicFilterConfig loaded = load_filter_config(dir + file);
+    ASSERT_EQ(loaded.segmentation.masked_sectors.size(), 2u) << file;
+    loaded.segmentation.masked_sectors.clear();
+    expect_same(loaded, preset);
+  }
+}
+
+TEST(ConfigYaml, PresetIsTheStartingPointWhereverItStands) {
+  // The preset applies first even when written after other keys.
+  const DynamicFilterConfig c = parse_filter_config(
+      "classification: {dynamic_weight_limit: 5}\npreset: thesis\n", "test.yaml");
+  EXPECT_EQ(c.classification.dynamic_weight_limit, 5);
+  EXPECT_EQ(c.velocity.measurement_variance_m2, thesis_config().velocity.measurement_variance_m2);
+  EXPECT_FALSE(c.free_space.enabled);
+  const DynamicFilterConfig d = parse_filter_config("preset: default\n", "test.yaml");
+  expect_same(d, DynamicFilterConfig{});
+  expect_error("preset: thesys", "preset must be one of default, thesis, got 'thesys'");
+  expect_error("preset: [thesis]", "preset must be a word");
+}
+
+TEST(ConfigYaml, ValuesAreReadIntoTheirFields) {
+  const DynamicFilterConfig c = parse_filter_config(
+      "segmentation: {cluster_gap_m: 0.2, gap_metric: range_difference,"
+      " masked_sectors: [[-0.5, -0.1], [0.1, 0.5]]}\n"
+      "tracking: {matching: nearest_neighbour}\n"
+      "classification: {presumption: guilt, static_weight_limit: 20}\n"
+      "max_pose_jump_m: 2.0\n",
+      "test.yaml");
+  EXPECT_EQ(c.segmentation.cluster_gap_m, 0.2);
+  EXPECT_EQ(c.segmentation.gap_metric, GapMetric::kRangeDifference);
+  ASSERT_EQ(c.segmentation.masked_sectors.size(), 2u);
+  EXPECT_EQ(c.segmentation.masked_sectors[1].end_rad, 0.5);
+  EXPECT_EQ(c.tracking.matching, Matching::kNearestNeighbour);
+  EXPECT_EQ(c.classification.presumption, Presumption::kGuilt);
+  EXPECT_EQ(c.classification.static_weight_limit, 20);
+  EXPECT_EQ(c.max_pose_jump_m, 2.0);
+  EXPECT_EQ(c.segmentation.min_points, 8);  // Untouched keys keep their defaults.
+  EXPECT_EQ(c.tracking.max_missed_scans, DynamicFilterConfig{}.tracking.max_missed_scans);
+  EXPECT_NO_THROW(parse_filter_config("", "empty.yaml"));
+}
+
+TEST(ConfigYaml, UnknownKeysWrongTypesAndBadValuesAreErrorsNamingTheKey) {
+  expect_error("segmentation: {cluster_gapm: 0.1}", "unknown key 'segmentation.cluster_gapm'");
+  expect_error("tracker: {}", "unknown key 'tracker'");
+  expect_error("segmentation: {cluster_gap_m: -0.1}", "segmentation.cluster_gap_m must be");
+  expect_error("segmentation: {min_points: many}", "segmentation.min_points must be an integer");
+  expect_error("tracking: {matching: psychic}", "tracking.matching must be one of");
+  expect_error("classification: {presumption: [1]}", "classification.presumption must be");
+  expect_error("velocity: {velocity_decay: 2}", "velocity.velocity_decay must be in [0, 1]");
+  expect_error("segmentation: {masked_sectors: [[1]]}", "segmentation.masked_sectors[0]");
+  expect_error("segmentation: {masked_sectors: [[0.5, 0.1]]}", "masked_sectors[0] must satisfy");
+  expect_error("segmentation: [1, 2]", "segmentation must be a mapping");
+  expect_error("a: [unclosed", "not valid YAML");
+  expect_error("max_time_gap_s:", "max_time_gap_s has no value");
+  EXPECT_THROW(load_filter_config("/nonexistent/dispel.yaml"), ConfigError);
+}
+
+TEST(ConfigYaml, TopLevelKeysAreThoseTheParserAccepts) {
+  const std::set<std::string> keys = filter_config_top_level_keys();
+  EXPECT_EQ(keys,
+            (std::set<std::string>{"preset", "odometry", "segmentation", "tracking", "velocity",
+                                   "classification", "free_space", "max_time_gap_s",
+                                   "max_pose_jump_m", "max_pose_jump_rad"}));
+  // Each of them is accepted...
+  for (const char* text : {"segmentation: {}", "tracking: {}", "velocity: {}", "classification: {}",
+                           "free_space: {}", "max_time_gap_s: 1.0", "max_pose_jump_m: 1.0",
+                           "max_pose_jump_rad: 1.0", "preset: thesis", "odometry: {model: ct}"}) {
+    EXPECT_NO_THROW(parse_filter_config(text, "t.yaml")) << text;
+  }
+  // ...and anything else is not.
+  EXPECT_THROW(parse_filter_config("fixed_frame: odom\n", "t.yaml"), ConfigError);
+}
+
+}  // namespace
+}  // namespace dispel::io

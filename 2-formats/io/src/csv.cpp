@@ -1,0 +1,141 @@
+#include "dispel/io/csv.hpp"
+
+#include <algorithm>
+#include <cstdarg>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "dispel/io/atomic_file.hpp"
+#include "dispel/io/errors.hpp"
+
+namespace dispel::io {
+namespace {
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream ss(line);
+  std::string cell;
+  while (std::getline(ss, cell, ',')) {
+    const auto b = cell.find_first_not_of(" \t\r");
+    const auto e = cell.find_last_not_of(" \t\r");
+    out.push_back(b == std::string::npos ? "" : cell.substr(b, e - b + 1));
+  }
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+bool blank(const std::string& line) { return line.find_first_not_of(" \t\r") == std::string::npos; }
+
+}  // namespace
+
+CsvColumns read_csv(const std::string& path, const std::vector<std::string>& wanted) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the file");
+  std::string line;
+  int number = 0;
+  std::vector<std::string> header;
+  while (header.empty() && std::getline(in, line)) {
+    ++number;
+    if (!blank(line)) header = split(line);
+  }
+  std::string expected;
+  for (const auto& w : wanted) expected += (expected.empty() ? "" : ",") + w;
+  std::vector<std::size_t> index;
+  for (const auto& w : wanted) {
+    const auto it = std::find(header.begin(), header.end(), w);
+    if (it == header.end()) {
+      throw InputError(path + ": the header must name the columns " + expected + " (line " +
+                       std::to_string(number) + ": '" + line + "')");
+    }
+    index.push_back(static_cast<std::size_t>(it - header.begin()));
+  }
+  CsvColumns out;
+  while (std::getline(in, line)) {
+    ++number;
+    if (blank(line)) continue;
+    const auto cells = split(line);
+    if (cells.size() != header.size()) {
+      throw InputError(path + ":" + std::to_string(number) + ": " +
+                       std::to_string(header.size()) + " values expected, got " +
+                       std::to_string(cells.size()));
+    }
+    std::vector<double> row;
+    for (std::size_t i : index) {
+      const std::string& c = cells[i];
+      std::size_t used = 0;
+      double v = 0.0;
+      try {
+        v = std::stod(c, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (c.empty() || used != c.size()) {
+        throw InputError(path + ":" + std::to_string(number) + ": " + header[i] + " '" + c +
+                         "' is not a number");
+      }
+      row.push_back(v);
+    }
+    out.rows.push_back(std::move(row));
+    out.lines.push_back(number);
+  }
+  return out;
+}
+
+std::vector<eval::TrajectoryPoint> read_trajectory_csv(const std::string& path) {
+  const CsvColumns c = read_csv(path, {"t", "x", "y", "yaw"});
+  std::vector<eval::TrajectoryPoint> out;
+  out.reserve(c.rows.size());
+  for (const auto& r : c.rows) out.push_back({r[0], r[1], r[2], r[3]});
+  return out;
+}
+
+void write_trajectory_csv(const std::string& path,
+                          const std::vector<eval::TrajectoryPoint>& trajectory) {
+  CsvWriter out(path);
+  out.line("t,x,y,yaw");
+  for (const auto& p : trajectory) out.printf("%.9f,%.9g,%.9g,%.9g\n", p.t_s, p.x_m, p.y_m, p.yaw_rad);
+  out.commit();
+}
+
+struct CsvWriter::Impl {
+  explicit Impl(const std::string& p) : path(p), file(p) {}
+  std::string path;
+  AtomicFile file;
+  std::FILE* f = nullptr;
+};
+
+CsvWriter::CsvWriter(const std::string& path) : impl_(std::make_unique<Impl>(path)) {
+  impl_->f = std::fopen(impl_->file.temp_path().c_str(), "w");
+  if (impl_->f == nullptr) throw OutputError(path + ": cannot write the file");
+}
+
+CsvWriter::~CsvWriter() {
+  if (impl_->f != nullptr) std::fclose(impl_->f);
+}
+
+void CsvWriter::line(const std::string& text) {
+  std::fputs(text.c_str(), impl_->f);
+  std::fputc('\n', impl_->f);
+}
+
+void CsvWriter::printf(const char* format, ...) {
+  va_list args;
+  va_start(args, format);
+  std::vfprintf(impl_->f, format, args);
+  va_end(args);
+}
+
+void CsvWriter::commit() {
+  const bool ok = std::fflush(impl_->f) == 0 && std::ferror(impl_->f) == 0;
+  const bool closed = std::fclose(impl_->f) == 0;
+  impl_->f = nullptr;
+  if (!ok || !closed) throw OutputError(impl_->path + ": writing failed");
+  try {
+    impl_->file.commit();
+  } catch (const std::exception& e) {
+    throw OutputError(impl_->path + ": " + e.what());
+  }
+}
+
+}  // namespace dispel::io

@@ -1,0 +1,83 @@
+#include "dispel/io/recording.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace dispel::io {
+
+Stamp Stamp::from_seconds(double seconds) {
+  const double whole = std::floor(seconds);
+  auto nsec = static_cast<std::int64_t>(std::llround((seconds - whole) * 1e9));
+  auto sec = static_cast<std::int64_t>(whole);
+  if (nsec >= 1000000000) {
+    nsec -= 1000000000;
+    ++sec;
+  }
+  return {sec, static_cast<std::uint32_t>(nsec)};
+}
+
+const char* message_kind_name(MessageKind kind) {
+  switch (kind) {
+    case MessageKind::kLaserScan:
+      return "sensor_msgs/LaserScan";
+    case MessageKind::kOdometry:
+      return "nav_msgs/Odometry";
+    case MessageKind::kTransforms:
+      return "tf2_msgs/TFMessage";
+    case MessageKind::kJointState:
+      return "sensor_msgs/JointState";
+    case MessageKind::kImu:
+      return "sensor_msgs/Imu";
+    case MessageKind::kNavSatFix:
+      return "sensor_msgs/NavSatFix";
+    case MessageKind::kOther:
+      break;
+  }
+  return "other";
+}
+
+bool Topics::has(const std::string& topic, MessageKind kind) const {
+  const auto it = topics_.find(topic);
+  return it != topics_.end() && it->second.kind == kind;
+}
+
+std::vector<std::string> Topics::of_kind(MessageKind kind) const {
+  std::vector<std::string> names;
+  for (const auto& [topic, info] : topics_) {
+    if (info.kind == kind) names.push_back(topic);
+  }
+  return names;
+}
+
+std::string Topics::list(MessageKind kind) const { return join_names(of_kind(kind)); }
+
+std::int64_t Topics::messages(const std::string& topic) const {
+  const auto it = topics_.find(topic);
+  return it == topics_.end() ? 0 : it->second.messages;
+}
+
+std::string join_names(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s.empty() ? std::string("none") : s;
+}
+
+ScanMessage filtered_message(const ScanMessage& original, const FilterResult& result) {
+  ScanMessage msg = original;
+  if (result.filtered.ranges_m.size() == msg.scan.ranges_m.size()) {
+    msg.scan.ranges_m = result.filtered.ranges_m;
+  }
+  return msg;
+}
+
+ScanMessage labels_message(const ScanMessage& original, const FilterResult& result) {
+  ScanMessage msg = original;
+  const std::size_t n = msg.scan.ranges_m.size();
+  msg.scan.intensities.assign(n, static_cast<float>(BeamLabel::kInvalid));
+  for (std::size_t i = 0; i < n && i < result.labels.size(); ++i) {
+    msg.scan.intensities[i] = static_cast<float>(result.labels[i]);
+  }
+  return msg;
+}
+
+}  // namespace dispel::io

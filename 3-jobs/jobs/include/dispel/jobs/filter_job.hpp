@@ -1,0 +1,57 @@
+#pragma once
+/// @file
+/// `dispel filter`: the dynamic filter over a recording (a ROS 1 bag or a CARMEN log), written
+/// as a bag with every input message plus the filtered scans and their labels. The scans go
+/// through pipeline::ScanFilterRunner, as in the nodes.
+
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dispel/core/dynamic_filter.hpp"
+#include "dispel/jobs/job.hpp"
+
+namespace dispel::jobs {
+
+struct FilterJobOptions {
+  std::string input;                          ///< .bag, or .log / .clf (CARMEN).
+  std::string output;                         ///< The bag to write.
+  std::optional<std::string> config_path;     ///< YAML; DynamicFilterConfig{} without it.
+  std::optional<DynamicFilterConfig> config;  ///< Used instead of config_path when given.
+  std::string scan_topic = "/scan";
+  std::string odom_topic = "/odom";
+  bool static_sensor = false;     ///< The sensor does not move: identity pose, no odometry.
+  bool scale_to_scanner = false;  ///< Apply scale_to_scanner() with the recording's scanner.
+  Compression compression = Compression::kNone;
+  /// How far beyond the first or last odometry message a scan's pose may be taken from it.
+  double odom_tolerance_s = 0.05;
+};
+
+/// What the job did.
+struct FilterJobStats {
+  std::string input_format;                           ///< "rosbag" or "carmen".
+  std::int64_t messages_in = 0;                       ///< Messages (bag) or lines (CARMEN) read.
+  std::int64_t messages_out = 0;                      ///< Messages written.
+  std::int64_t scans = 0;                             ///< Scans seen.
+  std::int64_t scans_filtered = 0;                    ///< Scans the filter tracked and filtered.
+  /// Passed through unchanged, by reason: bad_scan_<issue>, bad_pose, odometry_<lookup> (no pose
+  /// at the scan's stamp), waiting_for_scan_period (--scale-to-scanner, the first scans of a
+  /// scanner that states no period).
+  std::map<std::string, std::int64_t> scans_skipped;
+  FilterCounters counters;          ///< The filter's own counters.
+  std::vector<double> scan_time_s;  ///< Processing time of each scan, seconds.
+  DynamicFilterConfig config;       ///< The configuration used (scaled to the scanner if asked).
+  std::optional<double> scan_period_s;  ///< The scanner's period, when it was needed and known.
+  std::int64_t malformed_lines = 0;     ///< CARMEN only: skipped lines.
+  std::int64_t odometry_refused = 0;    ///< Odometry messages out of order or not finite.
+};
+
+/// Runs the job. The output appears only when complete (written to "<output>.partial" and
+/// renamed). @throws JobError, JobCancelled
+FilterJobStats run_filter_job(const FilterJobOptions& options, const Progress& progress = {},
+                              const std::atomic<bool>* cancel = nullptr);
+
+}  // namespace dispel::jobs

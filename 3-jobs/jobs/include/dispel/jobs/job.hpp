@@ -1,0 +1,73 @@
+#pragma once
+/// @file
+/// What every job (a recording in, a file out: dispel filter, odom, eval, sim, render, slam)
+/// shares: its one error type, cancellation and progress, and the recording formats by file name.
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "dispel/io/recording.hpp"
+
+namespace dispel::jobs {
+
+/// A recording, file or configuration that cannot be processed; what() is one line naming it.
+class JobError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Thrown when the job's cancel flag became true; no output is written.
+class JobCancelled : public std::runtime_error {
+ public:
+  JobCancelled() : std::runtime_error("interrupted") {}
+};
+
+/// Called now and then with the fraction done, in [0, 1].
+using Progress = std::function<void(double)>;
+
+/// @throws JobCancelled when @p cancel is set and true.
+void check_cancelled(const std::atomic<bool>* cancel);
+
+/// @throws JobError "<path>: <reason>" unless @p path is a regular file that exists.
+void check_input_file(const std::string& path);
+
+/// Runs @p fn; the errors of dispel::io (InputError, ConfigError, OutputError) and a bad value
+/// the core refuses (std::invalid_argument) come out as JobError with the same message.
+template <typename Fn>
+auto as_job(Fn&& fn) -> decltype(fn());
+
+/// Opens a recording by its file: a ROS 1 bag. @throws JobError "<path>: not a readable ROS 1 bag
+/// (...)" (a missing file too: callers that want "No such file" say so first, check_input_file)
+std::unique_ptr<io::RecordingReader> open_recording(const std::string& path);
+
+/// How a recording is written.
+enum class Compression { kNone, kBz2, kLz4 };
+
+/// Starts a recording at @p path: a ROS 1 bag. Nothing appears there until its finish().
+/// @throws JobError
+std::unique_ptr<io::RecordingWriter> create_recording(const std::string& path,
+                                                      Compression compression = Compression::kNone);
+
+// ------------------------------------------------------------------------------------------
+
+/// @cond internal
+[[noreturn]] void rethrow_as_job_error();
+/// @endcond
+
+template <typename Fn>
+auto as_job(Fn&& fn) -> decltype(fn()) {
+  try {
+    return fn();
+  } catch (const JobError&) {
+    throw;
+  } catch (const JobCancelled&) {
+    throw;
+  } catch (...) {
+    rethrow_as_job_error();
+  }
+}
+
+}  // namespace dispel::jobs

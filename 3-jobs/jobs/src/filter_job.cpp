@@ -1,0 +1,224 @@
+#include "dispel/jobs/filter_job.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "dispel/io/carmen.hpp"
+#include "dispel/io/config_yaml.hpp"
+#include "dispel/io/recording_motion.hpp"
+#include "dispel/pipeline/scan_filter_runner.hpp"
+
+namespace dispel::jobs {
+namespace {
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+DynamicFilterConfig base_config(const FilterJobOptions& o) {
+  if (o.config) return *o.config;
+  if (!o.config_path) return DynamicFilterConfig{};
+  return as_job([&] { return io::load_filter_config(*o.config_path); });
+}
+
+void check_period(const FilterJobOptions& o, const std::optional<double>& period,
+                  const LaserScan& first) {
+  if (o.scale_to_scanner && (!period || !(first.angle_increment_rad > 0.0))) {
+    throw JobError(o.input +
+                   ": --scale-to-scanner needs scans with a positive angle increment and "
+                   "increasing stamps (or a stated scan_time)");
+  }
+}
+
+// The scans' road to the filter, with the job's bookkeeping: the runner, and why each scan it
+// passed through was passed through.
+class ScanFilter {
+ public:
+  ScanFilter(const FilterJobOptions& o, FilterJobStats& stats)
+      : runner_({base_config(o), o.scale_to_scanner, 0.0}), stats_(stats) {}
+
+  // @p no_pose_reason: why @p pose is std::nullopt.
+  const FilterResult& process(const LaserScan& scan, double stated_period_s,
+                              const std::optional<Pose2>& pose, const char* no_pose_reason) {
+    const FilterResult& result = runner_.process(scan, stated_period_s, pose);
+    ++stats_.scans;
+    stats_.scan_time_s.push_back(runner_.last_time_s());
+    switch (runner_.last_outcome()) {
+      case pipeline::ScanOutcome::kFiltered:
+        ++stats_.scans_filtered;
+        break;
+      case pipeline::ScanOutcome::kBadScan:
+        ++stats_.scans_skipped[std::string("bad_scan_") +
+                               scan_issue_name(result.segmentation.issue)];
+        break;
+      case pipeline::ScanOutcome::kBadPose:
+        ++stats_.scans_skipped["bad_pose"];
+        break;
+      case pipeline::ScanOutcome::kNoPose:
+        ++stats_.scans_skipped[no_pose_reason];
+        break;
+      case pipeline::ScanOutcome::kWaitingForPeriod:
+        ++stats_.scans_skipped["waiting_for_scan_period"];
+        break;
+    }
+    return result;
+  }
+
+  void finish() {
+    stats_.counters = runner_.filter_counters();
+    stats_.config = runner_.config();
+    stats_.scan_period_s = runner_.scan_period_s();
+  }
+
+ private:
+  pipeline::ScanFilterRunner runner_;
+  FilterJobStats& stats_;
+};
+
+void write_outputs(io::RecordingWriter& out, const std::string& scan_topic, io::Stamp time,
+                   const io::ScanMessage& scan, const FilterResult& result) {
+  out.write(scan_topic + "_filtered", time, io::filtered_message(scan, result));
+  out.write(scan_topic + "_labels", time, io::labels_message(scan, result));
+}
+
+// ------------------------------------------------------------------------------------------
+// Recordings (ROS 1 bags).
+
+FilterJobStats run_recording(const FilterJobOptions& o, const Progress& progress,
+                             const std::atomic<bool>* cancel) {
+  FilterJobStats stats;
+  const std::unique_ptr<io::RecordingReader> in = open_recording(o.input);
+  stats.input_format = in->format_name();
+  const io::Topics& topics = in->topics();
+  const std::string filtered_topic = o.scan_topic + "_filtered";
+  const std::string labels_topic = o.scan_topic + "_labels";
+  if (topics.has(o.scan_topic, io::MessageKind::kLaserScan) &&
+      (topics.has(filtered_topic) || topics.has(labels_topic))) {
+    throw JobError(o.input + ": already has " + filtered_topic + " or " + labels_topic +
+                   "; filter the original recording");
+  }
+  io::MotionQuery query;
+  query.scan_topic = o.scan_topic;
+  query.pose_topic = o.static_sensor ? std::nullopt : std::optional<std::string>(o.odom_topic);
+  query.pose_tolerance_s = o.odom_tolerance_s;
+  query.missing_scan_hint = "; choose one with --scan-topic";
+  query.missing_pose_hint =
+      "; choose one with --odom-topic, or use --static-sensor for a sensor that does not move";
+  query.missing_mount_hint = "; record the sensor mount, or use --static-sensor";
+  const io::RecordingMotion motion =
+      as_job([&] { return io::read_motion(*in, query, [&] { check_cancelled(cancel); }); });
+  check_period(o, motion.scan_period_s, motion.first_scan);
+  stats.odometry_refused = motion.poses_refused;
+
+  ScanFilter filter(o, stats);
+  const std::unique_ptr<io::RecordingWriter> out = create_recording(o.output, o.compression);
+  std::int64_t all_messages = 0;
+  for (const auto& [name, info] : topics.all()) all_messages += info.messages;
+  as_job([&] {
+    in->read({}, [&](const io::RecordedMessage& m) {
+      check_cancelled(cancel);
+      out->copy(m);
+      ++stats.messages_in;
+      if (progress && stats.messages_in % 256 == 0) {
+        progress(static_cast<double>(stats.messages_in) /
+                 static_cast<double>(std::max<std::int64_t>(1, all_messages)));
+      }
+      if (m.topic() != o.scan_topic) return;
+      const std::optional<io::ScanMessage> scan = m.scan();
+      if (!scan) return;
+      PoseLookup why = PoseLookup::kOk;
+      const std::optional<Pose2> pose = motion.sensor_pose(scan->scan.stamp_s, &why);
+      const std::string reason = std::string("odometry_") + pose_lookup_name(why);
+      const FilterResult& result =
+          filter.process(scan->scan, scan->scan_time, pose, reason.c_str());
+      write_outputs(*out, o.scan_topic, m.time(), *scan, result);
+    });
+    out->finish();
+  });
+  filter.finish();
+  stats.messages_out = out->messages_written();
+  if (progress) progress(1.0);
+  return stats;
+}
+
+// ------------------------------------------------------------------------------------------
+// CARMEN logs: the laser's pose comes with each laser line; odometry lines become /odom.
+
+FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
+                          const std::atomic<bool>* cancel) {
+  FilterJobStats stats;
+  stats.input_format = "carmen";
+  const io::CarmenLog log = as_job([&] { return io::read_carmen_log(o.input); });
+  stats.messages_in = log.lines;
+  stats.malformed_lines = log.malformed_lines;
+  pipeline::ScanPeriod period;
+  for (std::size_t i = 0; i < log.scans.size() && !period.period(); ++i) {
+    period.add(log.scans[i].scan.stamp_s, 0.0);
+  }
+  check_period(o, period.period(), log.scans.front().scan);
+
+  ScanFilter filter(o, stats);
+  const std::unique_ptr<io::RecordingWriter> out = create_recording(o.output, o.compression);
+  as_job([&] {
+    // Odometry and scans in time order; a stamp that is not finite goes at its file position.
+    std::size_t next_odom = 0;
+    const auto write_odom_until = [&](double t) {
+      for (; next_odom < log.odometry.size() && log.odometry[next_odom].stamp_s <= t; ++next_odom) {
+        const TimedPose& p = log.odometry[next_odom];
+        if (!std::isfinite(p.stamp_s) || p.stamp_s < 0.0) continue;
+        io::OdometryMessage msg;
+        msg.header.stamp = io::Stamp::from_seconds(p.stamp_s);
+        msg.header.frame_id = "odom";
+        msg.child_frame_id = "base_link";
+        msg.pose = p.pose;
+        out->write("/odom", msg.header.stamp, msg);
+      }
+    };
+    for (std::size_t i = 0; i < log.scans.size(); ++i) {
+      check_cancelled(cancel);
+      const io::CarmenScan& cs = log.scans[i];
+      write_odom_until(cs.scan.stamp_s);
+      if (!std::isfinite(cs.scan.stamp_s) || cs.scan.stamp_s < 0.0) {
+        ++stats.scans_skipped["bad_stamp"];
+        continue;
+      }
+      io::ScanMessage msg;
+      msg.header.stamp = io::Stamp::from_seconds(cs.scan.stamp_s);
+      msg.header.frame_id = cs.kind == "RLASER" ? "rear_laser" : "laser";
+      msg.scan = cs.scan;
+      msg.angle_max = static_cast<float>(
+          cs.scan.angle_min_rad +
+          cs.scan.angle_increment_rad * static_cast<double>(cs.scan.size() > 0 ? cs.scan.size() - 1 : 0));
+      const FilterResult& result = filter.process(
+          cs.scan, 0.0, o.static_sensor ? Pose2{} : cs.laser_pose, "no_pose");
+      out->write(o.scan_topic, msg.header.stamp, msg);
+      write_outputs(*out, o.scan_topic, msg.header.stamp, msg, result);
+      if (progress && i % 64 == 0) {
+        progress(static_cast<double>(i) / static_cast<double>(log.scans.size()));
+      }
+    }
+    write_odom_until(std::numeric_limits<double>::infinity());
+    out->finish();
+  });
+  filter.finish();
+  stats.messages_out = out->messages_written();
+  if (progress) progress(1.0);
+  return stats;
+}
+
+}  // namespace
+
+FilterJobStats run_filter_job(const FilterJobOptions& options, const Progress& progress,
+                              const std::atomic<bool>* cancel) {
+  check_input_file(options.input);
+  if (options.output.empty()) throw JobError("no output file given (-o OUT.bag)");
+  if (options.config_path) base_config(options);  // Fail on a bad config before any reading.
+  if (ends_with(options.input, ".log") || ends_with(options.input, ".clf")) {
+    return run_carmen(options, progress, cancel);
+  }
+  return run_recording(options, progress, cancel);
+}
+
+}  // namespace dispel::jobs

@@ -1,0 +1,375 @@
+#include "dispel/jobs/filter_job.hpp"
+
+#include <geometry_msgs/TransformStamped.h>
+#include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/LaserScan.h>
+#include <sys/stat.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "dispel/io/ros1_messages.hpp"
+#include "dispel/sim/raycast.hpp"
+#include "test_files.hpp"
+
+namespace dispel::jobs {
+namespace {
+
+using namespace dispel::io;  // The formats the tests write and read.
+
+constexpr double kDeg = kPi / 180.0;
+
+using test::exists;
+using test::source_path;
+using test::temp_path;
+
+struct BagContents {
+  std::map<std::string, std::vector<sensor_msgs::LaserScan>> scans;
+  std::map<std::string, std::size_t> count;
+};
+
+BagContents read_bag(const std::string& path) {
+  BagContents c;
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  rosbag::View view(bag);
+  for (const rosbag::MessageInstance& m : view) {
+    ++c.count[m.getTopic()];
+    if (const auto s = m.instantiate<sensor_msgs::LaserScan>()) c.scans[m.getTopic()].push_back(*s);
+  }
+  return c;
+}
+
+// --- The recorded leg_tracker bag -----------------------------------------------------------
+
+TEST(FilterJobOnRecordedBag, RemovesWalkersKeepsWallsAndCopiesEveryMessage) {
+  FilterJobOptions o;
+  o.input = source_path("data/leg_tracker/demo_stationary_simple_environment.bag");
+  o.output = temp_path("leg_tracker_filtered.bag");
+  o.static_sensor = true;
+  o.scale_to_scanner = true;
+  const FilterJobStats stats = run_filter_job(o);
+  EXPECT_EQ(stats.scans, 1265);
+  EXPECT_EQ(stats.scans_filtered, 1265);
+  EXPECT_EQ(stats.config.segmentation.min_points, 4);
+  ASSERT_TRUE(exists(o.output));
+  EXPECT_FALSE(exists(o.output + ".partial"));
+
+  const BagContents in = read_bag(o.input);
+  const BagContents out = read_bag(o.output);
+  EXPECT_EQ(out.count.size(), 3u);
+  const auto& scans = out.scans.at("/scan");
+  const auto& filtered = out.scans.at("/scan_filtered");
+  const auto& labels = out.scans.at("/scan_labels");
+  ASSERT_EQ(scans.size(), 1265u);
+  ASSERT_EQ(filtered.size(), 1265u);
+  ASSERT_EQ(labels.size(), 1265u);
+  const auto& original = in.scans.at("/scan");
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    // The input is copied unchanged, bit for bit (it holds NaN, so no == on floats).
+    ASSERT_EQ(scans[k].header.stamp, original[k].header.stamp);
+    ASSERT_EQ(scans[k].ranges.size(), original[k].ranges.size());
+    ASSERT_EQ(std::memcmp(scans[k].ranges.data(), original[k].ranges.data(),
+                          scans[k].ranges.size() * sizeof(float)),
+              0);
+    EXPECT_EQ(filtered[k].header.stamp, original[k].header.stamp);
+    EXPECT_EQ(filtered[k].header.frame_id, original[k].header.frame_id);
+    EXPECT_EQ(labels[k].header.stamp, original[k].header.stamp);
+    ASSERT_EQ(labels[k].intensities.size(), original[k].ranges.size());
+  }
+
+  // Which beams are walls and which are walkers, without labels. The scanner does not move, so a
+  // beam that sees the room returns the same range all the time: a wall beam is one whose valid
+  // ranges over the whole recording have a spread (10th to 90th percentile) under 5 cm and that
+  // is valid in 90% of the scans; in a scan it counts when its range is within 5 cm of its
+  // median. A walker beam is one more than 30 cm nearer than its beam's 90th percentile.
+  const std::size_t n = original.front().ranges.size();
+  std::vector<float> median(n, NAN), p90(n, NAN);
+  std::vector<bool> wall(n, false);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::vector<float> v;
+    for (const auto& s : original) {
+      const float r = s.ranges[i];
+      if (std::isfinite(r) && r >= s.range_min && r <= s.range_max) v.push_back(r);
+    }
+    if (v.size() < original.size() / 2) continue;
+    std::sort(v.begin(), v.end());
+    median[i] = v[v.size() / 2];
+    p90[i] = v[v.size() * 9 / 10];
+    wall[i] =
+        v.size() >= original.size() * 9 / 10 && v[v.size() * 9 / 10] - v[v.size() / 10] < 0.05F;
+  }
+  std::int64_t wall_beams = 0, wall_kept = 0, walker_beams = 0, walker_removed = 0;
+  for (std::size_t k = 20; k < original.size(); ++k) {  // The first 2 s: tracks settle.
+    for (std::size_t i = 0; i < n; ++i) {
+      const float r = original[k].ranges[i];
+      if (!std::isfinite(r)) continue;
+      const bool removed = std::isnan(filtered[k].ranges[i]);
+      EXPECT_EQ(removed, labels[k].intensities[i] == 1.0F || labels[k].intensities[i] == 2.0F);
+      if (wall[i] && std::abs(r - median[i]) < 0.05F) {
+        ++wall_beams;
+        wall_kept += removed ? 0 : 1;
+      } else if (std::isfinite(p90[i]) && r < p90[i] - 0.3F) {
+        ++walker_beams;
+        walker_removed += removed ? 1 : 0;
+      }
+    }
+  }
+  const double kept = static_cast<double>(wall_kept) / static_cast<double>(wall_beams);
+  const double removed = static_cast<double>(walker_removed) / static_cast<double>(walker_beams);
+  RecordProperty("wall_beams_kept", std::to_string(kept));
+  RecordProperty("walker_beams_removed", std::to_string(removed));
+  ASSERT_GT(wall_beams, 30000);
+  ASSERT_GT(walker_beams, 10000);
+  // dispel's default configuration: measured 1.000 and 0.919 (the thesis's filter: 0.996 and
+  // 0.741; legs beyond 4 m cover under 4 beams, the scaled N_min, and are not objects at all).
+  EXPECT_GE(kept, 0.99);
+  EXPECT_GE(removed, 0.88);
+  std::remove(o.output.c_str());
+}
+
+// --- A moving robot, with odometry and the laser mount ---------------------------------------
+
+struct SimBagOptions {
+  bool mount_on_tf_static = true;
+  bool odom_on_tf = true;
+};
+
+// A robot drives along x at 0.4 m/s in a hall while a person crosses in front of it. The laser is
+// mounted 0.3 m ahead of base_link, turned by 0.1 rad.
+std::string write_sim_bag(const std::string& name, const SimBagOptions& opt) {
+  const std::string path = temp_path(name);
+  rosbag::Bag bag(path, rosbag::bagmode::Write);
+  const Pose2 mount{0.3, 0.0, 0.1};
+  if (opt.mount_on_tf_static) {
+    tf2_msgs::TFMessage tf;
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = to_ros_time(100.0);
+    t.header.frame_id = "base_link";
+    t.child_frame_id = "laser";
+    t.transform.translation.x = mount.x_m;
+    t.transform.rotation = quaternion_from_yaw(mount.yaw_rad);
+    tf.transforms = {t};
+    bag.write("/tf_static", t.header.stamp, tf);
+  }
+  sim::World world;
+  world.segments = {
+      {{-5, -6}, {15, -6}}, {{15, -6}, {15, 6}}, {{15, 6}, {-5, 6}}, {{-5, 6}, {-5, -6}}};
+  world.circles = {{{4.0, 2.5}, 0.3}};
+  const sim::ScanGeometry g{-135.0 * kDeg, 0.25 * kDeg, 1081, 0.05F, 30.0F};
+  for (int k = 0; k < 120; ++k) {
+    const double t = 100.0 + 0.05 * k;
+    const Pose2 base{0.4 * 0.05 * k, 0.0, 0.0};
+    nav_msgs::Odometry odom;
+    odom.header.stamp = to_ros_time(t);
+    odom.header.frame_id = "odom";
+    odom.child_frame_id = "base_link";
+    odom.pose.pose.position.x = base.x_m;
+    odom.pose.pose.orientation = quaternion_from_yaw(base.yaw_rad);
+    bag.write("/odom", odom.header.stamp, odom);
+    if (opt.odom_on_tf) {
+      tf2_msgs::TFMessage tf;
+      geometry_msgs::TransformStamped tr;
+      tr.header = odom.header;
+      tr.child_frame_id = "base_link";
+      tr.transform.translation.x = base.x_m;
+      tr.transform.rotation = odom.pose.pose.orientation;
+      tf.transforms = {tr};
+      bag.write("/tf", odom.header.stamp, tf);
+    }
+    sim::World now = world;
+    now.circles.push_back({{6.0, -3.0 + 1.2 * 0.05 * k}, 0.2});  // The person.
+    LaserScan scan = sim::raycast(now, base * mount, g);
+    scan.stamp_s = t;
+    const sensor_msgs::LaserScan msg = to_ros(scan, "laser");
+    bag.write("/scan", msg.header.stamp, msg);
+  }
+  return path;
+}
+
+TEST(FilterJob, MovingRobotWithOdometryAndMountRemovesThePersonOnly) {
+  FilterJobOptions o;
+  o.input = write_sim_bag("moving.bag", {});
+  o.output = temp_path("moving_filtered.bag");
+  o.compression = Compression::kLz4;
+  const FilterJobStats stats = run_filter_job(o);
+  EXPECT_EQ(stats.scans, 120);
+  EXPECT_EQ(stats.scans_filtered, 120);
+  EXPECT_GT(stats.counters.beams_removed_dynamic, 0);
+  const BagContents out = read_bag(o.output);
+  EXPECT_EQ(out.count.at("/odom"), 120u);
+  EXPECT_EQ(out.count.at("/tf"), 120u);
+  EXPECT_EQ(out.count.at("/tf_static"), 1u);
+  const auto& labels = out.scans.at("/scan_labels");
+  // After 2 s the person (nearer than 8 m on the right half) is removed and the hall is not.
+  std::int64_t person = 0, person_removed = 0, hall_removed = 0;
+  for (std::size_t k = 40; k < labels.size(); ++k) {
+    const Pose2 base{0.4 * 0.05 * static_cast<double>(k), 0.0, 0.0};
+    const Pose2 laser = base * Pose2{0.3, 0.0, 0.1};
+    const Eigen::Vector2d walker(6.0, -3.0 + 1.2 * 0.05 * static_cast<double>(k));
+    for (std::size_t i = 0; i < labels[k].ranges.size(); ++i) {
+      const double r = labels[k].ranges[i];
+      if (!std::isfinite(r)) continue;
+      const double b = labels[k].angle_min + labels[k].angle_increment * static_cast<double>(i);
+      const Eigen::Vector2d p = laser.apply({r * std::cos(b), r * std::sin(b)});
+      const bool removed = labels[k].intensities[i] == 1.0F;
+      if ((p - walker).norm() < 0.25) {
+        ++person;
+        person_removed += removed ? 1 : 0;
+      } else if ((p - Eigen::Vector2d(4.0, 2.5)).norm() > 0.35) {
+        hall_removed += removed ? 1 : 0;  // Walls; the pillar is checked below.
+      }
+    }
+  }
+  EXPECT_GT(person, 500);
+  EXPECT_GT(static_cast<double>(person_removed), 0.9 * static_cast<double>(person));
+  EXPECT_EQ(hall_removed, 0);
+  std::remove(o.input.c_str());
+  std::remove(o.output.c_str());
+}
+
+TEST(FilterJob, MissingMountIsAnErrorUnlessTheSensorIsStatic) {
+  FilterJobOptions o;
+  o.input = write_sim_bag("no_mount.bag", {false, true});
+  o.output = temp_path("no_mount_filtered.bag");
+  try {
+    run_filter_job(o);
+    ADD_FAILURE();
+  } catch (const JobError& e) {
+    EXPECT_NE(std::string(e.what()).find("no transform from base_link to laser"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(exists(o.output));
+  o.static_sensor = true;
+  EXPECT_NO_THROW(run_filter_job(o));
+  EXPECT_TRUE(exists(o.output));
+  std::remove(o.input.c_str());
+  std::remove(o.output.c_str());
+}
+
+// --- Bad input --------------------------------------------------------------------------------
+
+void expect_job_error(const FilterJobOptions& o, const std::string& expected) {
+  try {
+    run_filter_job(o);
+    ADD_FAILURE() << "accepted " << o.input;
+  } catch (const JobError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(expected), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+  EXPECT_FALSE(exists(o.output)) << "an output was written for " << o.input;
+  EXPECT_FALSE(exists(o.output + ".partial"));
+}
+
+TEST(FilterJobInput, BadRecordingsAndConfigurationsAreOneLineErrorsAndWriteNothing) {
+  const std::string real = source_path("data/leg_tracker/demo_stationary_simple_environment.bag");
+  FilterJobOptions o;
+  o.output = temp_path("never.bag");
+  o.static_sensor = true;
+
+  o.input = temp_path("does_not_exist.bag");
+  expect_job_error(o, "No such file");
+
+  o.input = temp_path("not_a_bag.bag");
+  std::ofstream(o.input) << "this is not a bag\n";
+  expect_job_error(o, "not a readable ROS 1 bag");
+
+  // The first half of a real bag: the index at its end is gone.
+  o.input = temp_path("truncated.bag");
+  {
+    std::ifstream in(real, std::ios::binary);
+    std::stringstream all;
+    all << in.rdbuf();
+    const std::string bytes = all.str();
+    std::ofstream(o.input, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  }
+  expect_job_error(o, "truncated.bag");
+
+  o.input = real;
+  o.scan_topic = "/front_scan";
+  expect_job_error(o, "no sensor_msgs/LaserScan topic /front_scan (LaserScan topics: /scan)");
+  o.scan_topic = "/scan";
+
+  o.static_sensor = false;
+  expect_job_error(o, "no nav_msgs/Odometry topic /odom");
+  o.static_sensor = true;
+
+  o.config_path = temp_path("bad_key.yaml");
+  std::ofstream(*o.config_path) << "segmentation:\n  cluster_gapm: 0.1\n";
+  expect_job_error(o, "unknown key 'segmentation.cluster_gapm'");
+  o.config_path = temp_path("negative_eps.yaml");
+  std::ofstream(*o.config_path) << "segmentation:\n  cluster_gap_m: -0.1\n";
+  expect_job_error(o, "segmentation.cluster_gap_m must be");
+}
+
+TEST(FilterJobInput, CancellingLeavesNoOutput) {
+  FilterJobOptions o;
+  o.input = source_path("data/leg_tracker/demo_stationary_simple_environment.bag");
+  o.output = temp_path("cancelled.bag");
+  o.static_sensor = true;
+  std::atomic<bool> cancel{false};
+  int calls = 0;
+  EXPECT_THROW(run_filter_job(
+                   o,
+                   [&](double) {
+                     if (++calls == 2) cancel.store(true);  // Partway through the second pass.
+                   },
+                   &cancel),
+               JobCancelled);
+  EXPECT_GE(calls, 2);
+  EXPECT_FALSE(exists(o.output));
+  EXPECT_FALSE(exists(o.output + ".partial"));
+}
+
+// --- CARMEN logs ------------------------------------------------------------------------------
+
+TEST(FilterJob, CarmenLogBecomesABagWithFilteredScans) {
+  // A FLASER log of a robot driving past a walking person, and its odometry.
+  const std::string log_path = temp_path("walk.log");
+  {
+    std::ofstream log(log_path);
+    log << "# CARMEN log written by the test\n";
+    sim::World world;
+    world.segments = {{{-5, -6}, {15, -6}}, {{15, -6}, {15, 6}}, {{15, 6}, {-5, 6}}};
+    const sim::ScanGeometry g{-kPi / 2.0, kPi / 360.0, 361, 0.001F, 80.0F};
+    for (int k = 0; k < 120; ++k) {
+      const double t = 5000.0 + 0.05 * k;
+      const Pose2 laser{0.02 * k, 0.0, 0.0};
+      sim::World now = world;
+      now.circles = {{{6.0, -3.0 + 0.06 * k}, 0.2}};
+      const LaserScan s = sim::raycast(now, laser, g);
+      log << "ODOM " << laser.x_m << " 0 0 0.4 0 0 " << std::fixed << t << " host " << t << "\n";
+      log << "FLASER 361";
+      for (float r : s.ranges_m) log << ' ' << (std::isfinite(r) ? r : 81.91F);
+      log << ' ' << laser.x_m << " 0 0 " << laser.x_m << " 0 0 " << t << " host " << t << "\n";
+    }
+    log << "FLASER garbage\n";
+  }
+  FilterJobOptions o;
+  o.input = log_path;
+  o.output = temp_path("walk.bag");
+  const FilterJobStats stats = run_filter_job(o);
+  EXPECT_EQ(stats.input_format, "carmen");
+  EXPECT_EQ(stats.scans, 120);
+  EXPECT_EQ(stats.malformed_lines, 1);
+  EXPECT_GT(stats.counters.beams_removed_dynamic, 300);
+  const BagContents out = read_bag(o.output);
+  EXPECT_EQ(out.count.at("/scan"), 120u);
+  EXPECT_EQ(out.count.at("/scan_filtered"), 120u);
+  EXPECT_EQ(out.count.at("/scan_labels"), 120u);
+  EXPECT_EQ(out.count.at("/odom"), 120u);
+  EXPECT_EQ(out.scans.at("/scan").front().header.frame_id, "laser");
+  std::remove(log_path.c_str());
+  std::remove(o.output.c_str());
+}
+
+}  // namespace
+}  // namespace dispel::jobs

@@ -1,0 +1,151 @@
+// The simulator's scenarios load, its bags hold what DESIGN.md lists, and sim -> filter -> eval
+// runs end to end.
+#include <gtest/gtest.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "dispel/jobs/eval_job.hpp"
+#include "dispel/jobs/filter_job.hpp"
+#include "dispel/io/scenario_yaml.hpp"
+#include "dispel/jobs/sim_job.hpp"
+
+namespace dispel::jobs {
+namespace {
+
+using namespace dispel::io;  // The formats the tests write and read.
+
+std::string scenario_path(const std::string& name) {
+  return std::string(DISPEL_SOURCE_DIR) + "/config/scenarios/" + name + ".yaml";
+}
+
+TEST(ScenarioYaml, ShippedScenariosLoadAndValidate) {
+  for (const char* name : {"thesis_hall", "empty_hall", "busy_corridor", "warehouse_forklift"}) {
+    const sim::Scenario s = load_scenario(scenario_path(name));
+    EXPECT_EQ(s.name, name);
+  }
+  const sim::Scenario thesis = load_scenario(scenario_path("thesis_hall"));
+  EXPECT_EQ(thesis.lidar.range_limit_m, 5.5);
+  EXPECT_EQ(thesis.lidar.masked_sectors_deg.size(), 2u);
+  ASSERT_TRUE(thesis.robot.lawnmower.has_value());
+  EXPECT_EQ(thesis.random_people.count, 6);
+  EXPECT_TRUE(load_scenario(scenario_path("empty_hall")).actors.empty());
+}
+
+TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
+  const auto expect_error = [](const std::string& yaml, const std::string& expected) {
+    try {
+      parse_scenario(yaml, "s.yaml");
+      ADD_FAILURE() << yaml;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  expect_error("lidar: {range_limt_m: 5}", "unknown key 'lidar.range_limt_m'");
+  expect_error("lidar: {resolution_deg: 0}", "lidar.resolution_deg must be");
+  expect_error("actors: [{type: dragon, standing: [0, 0]}]", "actors[0].type must be");
+  expect_error("actors: [{type: person}]", "actors[0] needs waypoints or standing");
+  expect_error("world: {walls: [[0, 0, 1]]}", "world.walls[0] must be a list of 4 numbers");
+  expect_error("robot: {speed_mps: fast}", "robot.speed_mps must be a number");
+}
+
+TEST(SimPipeline, SimulatedBagHasEveryTopicAndFiltersAndEvaluates) {
+  sim::Scenario s = load_scenario(scenario_path("thesis_hall"));
+  const sim::SimulationOutput run = sim::simulate(s, 7, 10.0);
+  const std::string bag_path = ::testing::TempDir() + "/sim.bag";
+  write_simulation(run, s, bag_path);
+  std::map<std::string, int> count;
+  {
+    rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
+    rosbag::View view(bag);
+    for (const rosbag::MessageInstance& m : view) ++count[m.getTopic()];
+  }
+  EXPECT_EQ(count["/scan"], 201);
+  EXPECT_EQ(count["/scan_truth"], 201);
+  EXPECT_EQ(count["/scan_truth_actor"], 201);
+  EXPECT_EQ(count["/odom"], 501);
+  EXPECT_EQ(count["/wheels"], 501);
+  EXPECT_EQ(count["/imu"], 501);
+  EXPECT_EQ(count["/ground_truth"], 501);
+  EXPECT_EQ(count["/tf_static"], 1);
+
+  FilterJobOptions o;
+  o.input = bag_path;
+  o.output = ::testing::TempDir() + "/sim_filtered.bag";
+  o.config_path = std::string(DISPEL_SOURCE_DIR) + "/config/default_masked.yaml";
+  const FilterJobStats stats = run_filter_job(o);
+  EXPECT_EQ(stats.scans_filtered, 201);
+  const eval::Rates r = evaluate_bags(bag_path, o.output);
+  EXPECT_EQ(r.scans, 201);
+  EXPECT_GT(r.static_beams, 1000);
+  EXPECT_GT(r.moving_beams, 1000);
+  EXPECT_GE(r.preservation_rate(), 0.99);
+  EXPECT_GT(r.rejection_rate(), 0.0);
+  EXPECT_THROW(evaluate_bags(o.output + ".nope", o.output), JobError);
+  const std::string real =
+      std::string(DISPEL_SOURCE_DIR) + "/data/leg_tracker/demo_stationary_simple_environment.bag";
+  EXPECT_THROW(evaluate_bags(real, o.output), JobError);  // A recording has no truth.
+  EXPECT_THROW(evaluate_bags(bag_path, real), JobError);  // Not filtered.
+  std::remove(bag_path.c_str());
+  std::remove(o.output.c_str());
+}
+
+// The targets of the simulator issue, on the thesis's scenario (three seeds, one minute each):
+// dispel's default configuration keeps >= 99 % of the static beams, removes >= 90 % of the moving
+// ones and finds a walker within a second (median); the thesis's filter, run on the same bags,
+// does not. Also the empty hall: with nobody there, every removed beam is a false positive.
+TEST(SimPipeline, DefaultConfigurationMeetsTheTargetsOnTheThesisHall) {
+  const std::string dir = ::testing::TempDir();
+  const auto filter_and_evaluate = [&](const std::string& bag, const std::string& config) {
+    FilterJobOptions o;
+    o.input = bag;
+    o.output = dir + "/targets_filtered.bag";
+    o.config_path = std::string(DISPEL_SOURCE_DIR) + "/config/" + config;
+    run_filter_job(o);
+    const eval::Rates r = evaluate_bags(bag, o.output);
+    std::remove(o.output.c_str());
+    return r;
+  };
+  eval::Rates ours, thesis;
+  std::vector<double> median_latency;
+  const sim::Scenario hall = load_scenario(scenario_path("thesis_hall"));
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    const std::string bag = dir + "/targets_hall.bag";
+    write_simulation(sim::simulate(hall, seed), hall, bag);
+    const eval::Rates a = filter_and_evaluate(bag, "default_masked.yaml");
+    const eval::Rates b = filter_and_evaluate(bag, "thesis_masked.yaml");
+    std::remove(bag.c_str());
+    for (auto [sum, one] : {std::pair{&ours, &a}, std::pair{&thesis, &b}}) {
+      sum->static_beams += one->static_beams;
+      sum->static_kept += one->static_kept;
+      sum->moving_beams += one->moving_beams;
+      sum->moving_removed += one->moving_removed;
+    }
+    median_latency.push_back(a.latency_median_s());
+    EXPECT_GE(a.preservation_rate(), 0.99) << "seed " << seed;
+  }
+  EXPECT_GE(ours.preservation_rate(), 0.99);
+  EXPECT_GE(ours.rejection_rate(), 0.90);
+  std::sort(median_latency.begin(), median_latency.end());
+  EXPECT_LT(median_latency[1], 1.0);
+  EXPECT_LT(thesis.rejection_rate(), 0.6);  // Measured about 0.46.
+  RecordProperty("preservation_rate", std::to_string(ours.preservation_rate()));
+  RecordProperty("rejection_rate", std::to_string(ours.rejection_rate()));
+
+  const sim::Scenario empty = load_scenario(scenario_path("empty_hall"));
+  const std::string bag = dir + "/targets_empty.bag";
+  write_simulation(sim::simulate(empty, 1), empty, bag);
+  const eval::Rates e = filter_and_evaluate(bag, "default_masked.yaml");
+  std::remove(bag.c_str());
+  EXPECT_EQ(e.moving_beams, 0);
+  EXPECT_GE(e.preservation_rate(), 0.99);
+}
+
+}  // namespace
+}  // namespace dispel::jobs

@@ -1,0 +1,193 @@
+#include "dispel/slam/grid_map.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "dispel/jobs/job.hpp"
+#include "test_files.hpp"
+
+namespace dispel::slam {
+namespace {
+
+using jobs::JobError;
+using test::temp_path;
+
+// A 5 x 3 map with every kind of cell, its origin turned by 0.3 rad.
+GridMap small_map() {
+  GridMap m;
+  m.resolution_m = 0.1;
+  m.origin = {-1.25, 2.5, 0.3};
+  m.width = 5;
+  m.height = 3;
+  m.cells = {100, 0,  0, -1, 100,  //
+             0,   0,  0, -1, 100,  //
+             -1,  -1, 0, 0,  100};
+  return m;
+}
+
+using test::write_text;
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST(SlamGridMap, WriteThenReadGivesTheSameMap) {
+  const GridMap m = small_map();
+  const std::string yaml = temp_path("small_map.yaml");
+  write_map_yaml(m, yaml);
+  EXPECT_FALSE(test::exists(yaml + ".partial"));
+  EXPECT_FALSE(test::exists(temp_path("small_map.pgm.partial")));
+  const GridMap back = read_map_yaml(yaml);
+  EXPECT_EQ(back, m);
+  EXPECT_EQ(back.occupied_cells(), 4);
+  EXPECT_EQ(back.free_cells(), 7);
+  // map_saver's layout: the image's first row is the map's last (top) row.
+  const std::string pgm = read_text(temp_path("small_map.pgm"));
+  const std::string pixels = pgm.substr(pgm.size() - 15);
+  EXPECT_EQ(static_cast<unsigned char>(pixels[0]), 205u);  // (0, 2) unknown
+  EXPECT_EQ(static_cast<unsigned char>(pixels[2]), 254u);  // (2, 2) free
+  EXPECT_EQ(static_cast<unsigned char>(pixels[10]), 0u);   // (0, 0) occupied
+  std::remove(yaml.c_str());
+  std::remove(temp_path("small_map.pgm").c_str());
+}
+
+// Cells between map_saver's thresholds are written as unknown; the rest stays.
+TEST(SlamGridMap, IntermediateOccupancyIsSavedAsMapSaverDoes) {
+  GridMap m = small_map();
+  m.cells[1] = 20;  // free (<= 25)
+  m.cells[2] = 50;  // unknown
+  m.cells[3] = 70;  // occupied (>= 65)
+  const std::string yaml = temp_path("intermediate.yaml");
+  write_map_yaml(m, yaml);
+  const GridMap back = read_map_yaml(yaml);
+  EXPECT_EQ(back.at(1, 0), kFreeCell);
+  EXPECT_EQ(back.at(2, 0), kUnknownCell);
+  EXPECT_EQ(back.at(3, 0), kOccupiedCell);
+}
+
+// A map as a robotics engineer has it: P2 (text) image in a sub-folder, comments, negate, scale
+// mode and a maximum value below 255.
+TEST(SlamGridMap, ReadsMapServerVariants) {
+  const std::string dir = temp_path("");
+  write_text("ascii.pgm", "P2\n# made by hand\n3 2\n# max\n15\n15 0 8\n0 15 15\n");
+  // negate: pixel 15 (-> 255) is occupied, 0 free, 8 (136 -> occupancy 0.53) unknown.
+  const std::string yaml =
+      write_text("ascii.yaml",
+                 "image: ascii.pgm\nresolution: 0.5\norigin: [1.0, -2.0, 0.0]\nnegate: 1\n"
+                 "occupied_thresh: 0.65\nfree_thresh: 0.196\n");
+  const GridMap m = read_map_yaml(yaml);
+  ASSERT_EQ(m.width, 3);
+  ASSERT_EQ(m.height, 2);
+  EXPECT_EQ(m.resolution_m, 0.5);
+  EXPECT_EQ(m.origin.x_m, 1.0);
+  EXPECT_EQ(m.origin.y_m, -2.0);
+  // Bottom row (the image's last): 0 15 15 -> free occupied occupied.
+  EXPECT_EQ(m.at(0, 0), kFreeCell);
+  EXPECT_EQ(m.at(1, 0), kOccupiedCell);
+  EXPECT_EQ(m.at(2, 1), kUnknownCell);
+  EXPECT_EQ(m.at(0, 1), kOccupiedCell);
+
+  const std::string scaled =
+      write_text("scaled.yaml", "image: " + dir +
+                                    "/ascii.pgm\nresolution: 0.5\norigin: [0, 0, 0]\nnegate: 1\n"
+                                    "occupied_thresh: 0.65\nfree_thresh: 0.196\nmode: scale\n");
+  const GridMap s = read_map_yaml(scaled);
+  EXPECT_GT(s.at(2, 1), 0);  // 0.53 between the thresholds: scaled, not unknown.
+  EXPECT_LT(s.at(2, 1), 100);
+}
+
+// --- Bad files ----------------------------------------------------------------------------------
+
+void expect_error(const std::string& yaml, const std::string& expected) {
+  try {
+    read_map_yaml(yaml);
+    ADD_FAILURE() << "accepted " << yaml;
+  } catch (const JobError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(expected), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+}
+
+std::string map_yaml(const std::string& name, const std::string& image,
+                     const std::string& resolution = "0.05") {
+  return write_text(name, "image: " + image + "\nresolution: " + resolution +
+                              "\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\n"
+                              "free_thresh: 0.196\n");
+}
+
+TEST(SlamGridMapBadInput, EachProblemNamedWithItsFile) {
+  write_text("good.pgm", std::string("P5\n2 2\n255\n") + std::string("\x00\xfe\xcd\xfe", 4));
+  EXPECT_NO_THROW(read_map_yaml(map_yaml("good.yaml", "good.pgm")));
+
+  expect_error(temp_path("no_such_map.yaml"), "no_such_map.yaml: No such file or directory");
+  expect_error(map_yaml("no_image.yaml", "missing.pgm"), "missing.pgm: No such file or directory");
+  expect_error(map_yaml("zero.yaml", "good.pgm", "0"),
+               "zero.yaml: resolution 0: must be a positive number");
+  expect_error(map_yaml("negative.yaml", "good.pgm", "-0.05"), "negative.yaml: resolution -0.05");
+  expect_error(map_yaml("word.yaml", "good.pgm", "fine"), "word.yaml: resolution is not a number");
+  expect_error(write_text("no_origin.yaml",
+                          "image: good.pgm\nresolution: 0.05\nnegate: 0\n"
+                          "occupied_thresh: 0.65\nfree_thresh: 0.196\n"),
+               "no_origin.yaml: no 'origin' key");
+  expect_error(write_text("no_negate.yaml",
+                          "image: good.pgm\nresolution: 0.05\n"
+                          "origin: [0, 0, 0]\noccupied_thresh: 0.65\n"
+                          "free_thresh: 0.196\n"),
+               "no_negate.yaml: no 'negate' key");
+  expect_error(write_text("short_origin.yaml",
+                          "image: good.pgm\nresolution: 0.05\n"
+                          "origin: [0, 0]\nnegate: 0\n"
+                          "occupied_thresh: 0.65\nfree_thresh: 0.196\n"),
+               "origin must be [x, y, yaw]");
+  expect_error(write_text("not_yaml.yaml", "image: [unclosed\n"), "not_yaml.yaml: not a YAML file");
+  expect_error(write_text("list.yaml", "- a\n- b\n"), "list.yaml: not a map_server map");
+
+  write_text("png.pgm", "\x89PNG\r\n\x1a\n0000");
+  expect_error(map_yaml("png.yaml", "png.pgm"), "png.pgm: not a PGM image");
+  write_text("truncated.pgm", std::string("P5\n4 4\n255\n") + std::string(10, '\xfe'));
+  expect_error(map_yaml("truncated.yaml", "truncated.pgm"),
+               "truncated.pgm: image is 4 x 4 pixels but holds only 10");
+  write_text("bad_header.pgm", "P5\n4 x\n255\n");
+  expect_error(map_yaml("bad_header.yaml", "bad_header.pgm"),
+               "bad_header.pgm: PGM height 'x' is not a positive integer");
+  write_text("wide.pgm", "P5\n1 1\n65535\n\x00\x00");
+  expect_error(map_yaml("wide.yaml", "wide.pgm"), "16-bit PGM");
+  write_text("ascii_bad.pgm", "P2\n2 1\n255\n12 300\n");
+  expect_error(map_yaml("ascii_bad.yaml", "ascii_bad.pgm"), "pixel 1 '300'");
+}
+
+TEST(SlamGridMapBadInput, InvalidMapsAreNotWritten) {
+  const std::string yaml = temp_path("invalid.yaml");
+  const auto expect_refused = [&](const GridMap& m, const std::string& expected) {
+    try {
+      write_map_yaml(m, yaml);
+      ADD_FAILURE() << "wrote an invalid map";
+    } catch (const JobError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(test::exists(yaml));
+    EXPECT_FALSE(test::exists(temp_path("invalid.pgm")));
+  };
+  GridMap m = small_map();
+  m.resolution_m = 0.0;
+  expect_refused(m, "resolution 0 m: must be a positive number");
+  m = small_map();
+  m.cells.pop_back();
+  expect_refused(m, "map of 5 x 3 cells holds 14 values");
+  m = small_map();
+  m.cells[0] = 101;
+  expect_refused(m, "map cell value 101");
+  expect_refused(GridMap{}, "it has none");
+  EXPECT_THROW(write_map_yaml(small_map(), temp_path("no_such_folder/map.yaml")), JobError);
+}
+
+}  // namespace
+}  // namespace dispel::slam

@@ -1,0 +1,231 @@
+# Run by ctest with -DDISPEL=<path to the dispel executable>: checks the command-line contract.
+function(run_dispel out_rc out_stdout out_stderr)
+  execute_process(COMMAND ${DISPEL} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE so ERROR_VARIABLE se
+                  TIMEOUT 120)
+  set(${out_rc} "${rc}" PARENT_SCOPE)
+  set(${out_stdout} "${so}" PARENT_SCOPE)
+  set(${out_stderr} "${se}" PARENT_SCOPE)
+endfunction()
+
+# bench --json prints {"results": [{"name", "beams", "median_ns"}]} and nothing else on stdout.
+run_dispel(rc so se bench --json --filter "^(segmentation|reference_dbscan)/1617/"
+           --repetitions 1 --min-time 0.01)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "bench --json failed (${rc}): ${se}")
+endif()
+string(JSON count LENGTH "${so}" results)
+if(NOT count EQUAL 2)
+  message(FATAL_ERROR "expected 2 results, got ${count}: ${so}")
+endif()
+foreach(i 0 1)
+  string(JSON name GET "${so}" results ${i} name)
+  string(JSON beams GET "${so}" results ${i} beams)
+  string(JSON median GET "${so}" results ${i} median_ns)
+  if(NOT name MATCHES "^(segmentation|reference_dbscan)$" OR NOT beams EQUAL 1617
+     OR NOT median GREATER 0)
+    message(FATAL_ERROR "bad result ${i}: ${so}")
+  endif()
+endforeach()
+
+# Bad input: a clear one-line error on stderr and a non-zero exit, never a crash.
+foreach(case "bench;--repetitions;0" "bench;--min-time;-1" "bench;--filter;no_such_case" "frob" "")
+  run_dispel(rc so se ${case})
+  if(rc EQUAL 0 OR NOT rc MATCHES "^[0-9]+$")
+    message(FATAL_ERROR "'dispel ${case}' exited '${rc}', expected a non-zero exit code")
+  endif()
+  if(se STREQUAL "")
+    message(FATAL_ERROR "'dispel ${case}' printed no error")
+  endif()
+endforeach()
+message(STATUS "command-line contract holds")
+
+if(NOT HAVE_IO)
+  return()
+endif()
+
+# dispel filter: bad input gives one line on stderr, a non-zero exit, and no output file.
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+set(out ${WORK_DIR}/out.bag)
+file(WRITE ${WORK_DIR}/not_a_bag.bag "hello\n")
+file(WRITE ${WORK_DIR}/unknown_key.yaml "segmentation:\n  cluster_gapm: 0.1\n")
+file(WRITE ${WORK_DIR}/negative_eps.yaml "segmentation:\n  cluster_gap_m: -0.1\n")
+# The first 1 MB of the real bag: truncated.
+execute_process(COMMAND head -c 1000000 ${BAG} OUTPUT_FILE ${WORK_DIR}/truncated.bag)
+
+function(expect_filter_error expected)
+  file(REMOVE ${out})
+  run_dispel(rc so se filter ${ARGN} -o ${out})
+  if(rc EQUAL 0)
+    message(FATAL_ERROR "'dispel filter ${ARGN}' succeeded; expected: ${expected}")
+  endif()
+  string(STRIP "${se}" line)
+  if(NOT line MATCHES "${expected}" OR line MATCHES "\n")
+    message(FATAL_ERROR "'dispel filter ${ARGN}': expected one line matching '${expected}', got:\n${se}")
+  endif()
+  if(EXISTS ${out} OR EXISTS ${out}.partial)
+    message(FATAL_ERROR "'dispel filter ${ARGN}' left an output file")
+  endif()
+endfunction()
+
+expect_filter_error("No such file" ${WORK_DIR}/missing.bag --static-sensor)
+expect_filter_error("not a readable ROS 1 bag" ${WORK_DIR}/not_a_bag.bag --static-sensor)
+expect_filter_error("truncated.bag" ${WORK_DIR}/truncated.bag --static-sensor)
+expect_filter_error("no sensor_msgs/LaserScan topic /front" ${BAG} --static-sensor --scan-topic /front)
+expect_filter_error("no nav_msgs/Odometry topic /odom" ${BAG})
+expect_filter_error("unknown key 'segmentation.cluster_gapm'" ${BAG} --static-sensor
+                    --config ${WORK_DIR}/unknown_key.yaml)
+expect_filter_error("segmentation.cluster_gap_m must be" ${BAG} --static-sensor
+                    --config ${WORK_DIR}/negative_eps.yaml)
+expect_filter_error("cannot open the configuration file" ${BAG} --static-sensor
+                    --config ${WORK_DIR}/missing.yaml)
+
+# A good run: the bag and the statistics.
+file(REMOVE ${out})
+run_dispel(rc so se filter ${BAG} -o ${out} --static-sensor --scale-to-scanner
+           --stats ${WORK_DIR}/stats.json)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${out})
+  message(FATAL_ERROR "dispel filter failed (${rc}): ${se}")
+endif()
+if(NOT so MATCHES "1265 scans")
+  message(FATAL_ERROR "no summary: ${so}")
+endif()
+file(READ ${WORK_DIR}/stats.json stats)
+string(JSON total GET "${stats}" scans total)
+string(JSON processed GET "${stats}" scans processed)
+string(JSON dynamic GET "${stats}" beams_removed dynamic)
+string(JSON median GET "${stats}" scan_time_us median)
+string(JSON p99 GET "${stats}" scan_time_us p99)
+string(JSON tracks GET "${stats}" tracks_created)
+string(JSON min_points GET "${stats}" config min_points)
+if(NOT total EQUAL 1265 OR NOT processed EQUAL 1265 OR NOT dynamic GREATER 10000
+   OR NOT median GREATER 0 OR p99 LESS median OR NOT tracks GREATER 10 OR NOT min_points EQUAL 4)
+  message(FATAL_ERROR "bad statistics: ${stats}")
+endif()
+
+# Ctrl-C: either interrupted with nothing written, or already done with a complete bag.
+file(REMOVE ${out})
+execute_process(COMMAND timeout --preserve-status -s INT 0.2 ${DISPEL} filter ${BAG} -o ${out} --static-sensor
+                        --compression bz2
+                RESULT_VARIABLE rc OUTPUT_VARIABLE so ERROR_VARIABLE se)
+if(EXISTS ${out}.partial)
+  message(FATAL_ERROR "an interrupted run left ${out}.partial")
+endif()
+if(rc EQUAL 130)
+  if(EXISTS ${out} OR NOT se MATCHES "interrupted")
+    message(FATAL_ERROR "interrupted run: wrote ${out} or said nothing: ${se}")
+  endif()
+elseif(NOT rc EQUAL 0 OR NOT EXISTS ${out})
+  message(FATAL_ERROR "run under SIGINT ended with ${rc}: ${se}")
+endif()
+message(STATUS "dispel filter contract holds (SIGINT run exit ${rc})")
+
+# dispel sim and dispel eval: a short simulated run, filtered and evaluated.
+set(sim ${WORK_DIR}/sim.bag)
+run_dispel(rc so se sim ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o ${sim} --seed 3
+           --duration 4)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${sim})
+  message(FATAL_ERROR "dispel sim failed (${rc}): ${se}")
+endif()
+run_dispel(rc so se filter ${sim} -o ${WORK_DIR}/sim_filtered.bag
+           --config ${SOURCE_DIR}/config/default_masked.yaml)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "dispel filter on the simulation failed (${rc}): ${se}")
+endif()
+run_dispel(rc so se eval --truth ${sim} --result ${WORK_DIR}/sim_filtered.bag --json)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "dispel eval failed (${rc}): ${se}")
+endif()
+string(JSON pres GET "${so}" preservation_rate)
+string(JSON scans GET "${so}" scans)
+string(JSON static_beams GET "${so}" per_class static beams)
+string(JSON latency_type TYPE "${so}" detection_latency_s)
+string(JSON f1_type TYPE "${so}" f1)
+if(NOT scans EQUAL 81 OR NOT static_beams GREATER 0 OR pres LESS 0.99
+   OR NOT latency_type STREQUAL "OBJECT" OR NOT f1_type MATCHES "NUMBER|NULL")
+  message(FATAL_ERROR "bad evaluation: ${so}")
+endif()
+
+file(WRITE ${WORK_DIR}/bad_scenario.yaml "lidar: {range_limt_m: 5}\n")
+function(expect_error_no_output expected output)
+  file(REMOVE ${output})
+  run_dispel(rc so se ${ARGN})
+  string(STRIP "${se}" line)
+  if(rc EQUAL 0 OR NOT line MATCHES "${expected}" OR line MATCHES "\n" OR EXISTS ${output})
+    message(FATAL_ERROR "'dispel ${ARGN}': expected one line matching '${expected}', a non-zero "
+                        "exit and no ${output}; got ${rc}:\n${se}")
+  endif()
+endfunction()
+expect_error_no_output("unknown key 'lidar.range_limt_m'" ${WORK_DIR}/x.bag
+                       sim ${WORK_DIR}/bad_scenario.yaml -o ${WORK_DIR}/x.bag)
+expect_error_no_output("cannot open the scenario file" ${WORK_DIR}/x.bag
+                       sim ${WORK_DIR}/missing.yaml -o ${WORK_DIR}/x.bag)
+expect_error_no_output("no /scan_truth" ${WORK_DIR}/x.bag
+                       eval --truth ${BAG} --result ${WORK_DIR}/sim_filtered.bag)
+expect_error_no_output("no /scan_labels or /scan_filtered" ${WORK_DIR}/x.bag
+                       eval --truth ${sim} --result ${sim})
+message(STATUS "dispel sim and eval contract holds")
+
+# dispel odom and dispel eval-trajectory: the simulated run's wheels and IMU against its truth.
+set(traj ${WORK_DIR}/trajectory.csv)
+set(truth ${WORK_DIR}/truth.csv)
+run_dispel(rc so se odom ${sim} -o ${traj} --model ct --truth-csv ${truth} --json)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${traj} OR NOT EXISTS ${truth})
+  message(FATAL_ERROR "dispel odom failed (${rc}): ${se}")
+endif()
+string(JSON model GET "${so}" model)
+string(JSON wheel_source GET "${so}" wheel_source)
+string(JSON rows GET "${so}" rows)
+if(NOT model STREQUAL "ct" OR NOT wheel_source STREQUAL "/wheels" OR rows LESS 200)
+  message(FATAL_ERROR "bad odom statistics: ${so}")
+endif()
+run_dispel(rc so se eval-trajectory --truth ${truth} --estimate ${traj} --json)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "dispel eval-trajectory failed (${rc}): ${se}")
+endif()
+foreach(key rmse_position_m rmse_yaw_rad final_position_error_m final_yaw_error_rad path_length_m)
+  string(JSON value GET "${so}" ${key})
+  if(value STREQUAL "" OR value MATCHES "null")
+    message(FATAL_ERROR "eval-trajectory: no ${key} in ${so}")
+  endif()
+endforeach()
+string(JSON rmse GET "${so}" rmse_position_m)
+if(rmse GREATER 0.5)
+  message(FATAL_ERROR "odometry of a 4 s simulated run is off by ${rmse} m: ${so}")
+endif()
+expect_error_no_output("no_such.bag: not a readable ROS 1 bag" ${WORK_DIR}/x.csv
+                       odom ${WORK_DIR}/no_such.bag -o ${WORK_DIR}/x.csv)
+expect_error_no_output("which topic holds the wheel speeds" ${WORK_DIR}/x.csv
+                       odom ${BAG} -o ${WORK_DIR}/x.csv)
+expect_error_no_output("cannot open the file" ${WORK_DIR}/x.csv
+                       eval-trajectory --truth ${WORK_DIR}/missing.csv --estimate ${traj})
+message(STATUS "dispel odom and eval-trajectory contract holds")
+
+# dispel render: a map of the shipped recording (a stationary scanner), and a bad view.
+set(picture ${WORK_DIR}/render.png)
+file(REMOVE ${picture})
+run_dispel(rc so se render ${BAG} -o ${picture} --static-sensor --size 800x600)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${picture} OR NOT so MATCHES "1265 scans")
+  message(FATAL_ERROR "dispel render failed (${rc}): ${so}${se}")
+endif()
+file(READ ${picture} png_header LIMIT 8 HEX)
+if(NOT png_header STREQUAL "89504e470d0a1a0a")
+  message(FATAL_ERROR "dispel render wrote no PNG: ${png_header}")
+endif()
+file(REMOVE ${picture})
+expect_error_no_output("unknown view 'top'" ${picture}
+                       render ${BAG} -o ${picture} --static-sensor --view top)
+expect_error_no_output("scan index 5000 out of range" ${picture}
+                       render ${BAG} -o ${picture} --static-sensor --view scan --scan-index 5000)
+expect_error_no_output("no nav_msgs/Odometry topic /odom" ${picture} render ${BAG} -o ${picture})
+# dispel eval --plot: the evaluation of the short simulated run above as a picture.
+file(REMOVE ${WORK_DIR}/eval.png)
+run_dispel(rc so se eval --truth ${sim} --result ${WORK_DIR}/sim_filtered.bag --plot
+           ${WORK_DIR}/eval.png)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK_DIR}/eval.png OR NOT so MATCHES "preservation rate")
+  message(FATAL_ERROR "dispel eval --plot failed (${rc}): ${so}${se}")
+endif()
+expect_error_no_output("unknown picture format" ${WORK_DIR}/eval.gif
+                       eval --truth ${sim} --result ${WORK_DIR}/sim_filtered.bag
+                       --plot ${WORK_DIR}/eval.gif)
+message(STATUS "dispel render contract holds")

@@ -1,0 +1,201 @@
+// The dispel command line. Each subcommand is a thin adapter over the libraries.
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
+
+#include "bench_command.hpp"
+#ifdef DISPEL_HAVE_IO
+#include "filter_command.hpp"
+#include "odom_commands.hpp"
+#include "render_command.hpp"
+#include "sim_commands.hpp"
+#endif
+#ifdef DISPEL_HAVE_SLAM
+#include "slam_cli.hpp"
+#endif
+
+#ifndef DISPEL_VERSION
+#define DISPEL_VERSION "unknown"
+#endif
+
+int main(int argc, char** argv) {
+  CLI::App app{"dispel: removes moving objects from 2D LiDAR scans before SLAM sees them"};
+  app.set_version_flag("--version", DISPEL_VERSION);
+  app.require_subcommand(0, 1);
+
+  dispel::apps::BenchOptions bench;
+  CLI::App* bench_cmd = app.add_subcommand(
+      "bench",
+      "Measure segmentation, the whole filter (the thesis's and dispel's default), the reference "
+      "DBSCAN and an odometry step, at 1617 to 1000000 beams");
+  bench_cmd->add_flag("--json", bench.json,
+                      R"(Print {"results": [{"name", "beams", "median_ns"}]})");
+  bench_cmd
+      ->add_option("--filter", bench.filter,
+                   "Regular expression on case names: segmentation, filter_pipeline, "
+                   "filter_pipeline_default, reference_dbscan, reference_dbscan_grid, "
+                   "odometry_ct_step, odometry_omni_step (e.g. segmentation/1617)")
+      ->capture_default_str();
+  bench_cmd->add_option("--repetitions", bench.repetitions, "Repetitions per case (median taken)")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  bench_cmd->add_option("--min-time", bench.min_time_s, "Minimum seconds per repetition")
+      ->check(CLI::Range(0.001, 60.0))
+      ->capture_default_str();
+
+#ifdef DISPEL_HAVE_IO
+  dispel::apps::FilterCommandOptions filter;
+  std::string config_path;
+  CLI::App* filter_cmd = app.add_subcommand(
+      "filter", "Remove moving objects from the scans of a recording (ROS 1 bag or CARMEN log)");
+  filter_cmd->add_option("input", filter.job.input, "IN.bag, or a CARMEN .log/.clf")->required();
+  filter_cmd->add_option("-o,--output", filter.job.output, "OUT.bag to write")->required();
+  filter_cmd->add_option("--config", config_path, "YAML configuration (see config/default.yaml)");
+  filter_cmd->add_option("--scan-topic", filter.job.scan_topic, "LaserScan topic")
+      ->capture_default_str();
+  filter_cmd->add_option("--odom-topic", filter.job.odom_topic, "Odometry topic")
+      ->capture_default_str();
+  filter_cmd->add_flag("--static-sensor", filter.job.static_sensor,
+                       "The sensor does not move (no odometry needed)");
+  filter_cmd->add_flag("--scale-to-scanner", filter.job.scale_to_scanner,
+                       "Carry N_min, L_d and L_s over from the thesis's scanner to this one");
+  filter_cmd->add_option("--stats", filter.stats_path, "Write statistics as JSON here");
+  filter_cmd->add_option("--compression", filter.compression, "Output bag compression")
+      ->check(CLI::IsMember({"none", "bz2", "lz4"}))
+      ->capture_default_str();
+
+  dispel::apps::SimOptions sim;
+  CLI::App* sim_cmd =
+      app.add_subcommand("sim", "Simulate a scenario into a bag with ground truth per beam");
+  sim_cmd->add_option("scenario", sim.scenario, "SCENARIO.yaml (see config/scenarios/)")
+      ->required();
+  sim_cmd->add_option("-o,--output", sim.output, "OUT.bag to write")->required();
+  sim_cmd->add_option("--seed", sim.seed, "Random seed (same seed, same bag)")
+      ->capture_default_str();
+  sim_cmd->add_option("--duration", sim.duration_s, "Seconds to simulate (default: the scenario's)")
+      ->check(CLI::PositiveNumber);
+
+  dispel::apps::EvalOptions evaluation;
+  CLI::App* eval_cmd =
+      app.add_subcommand("eval", "Compare a filtered bag with the simulator's ground truth");
+  eval_cmd->add_option("--truth", evaluation.truth, "SIM.bag from dispel sim")->required();
+  eval_cmd->add_option("--result", evaluation.result, "FILTERED.bag from dispel filter")
+      ->required();
+  eval_cmd->add_option("--scan-topic", evaluation.scan_topic, "LaserScan topic")
+      ->capture_default_str();
+  eval_cmd->add_flag("--json", evaluation.json, "Print JSON");
+  eval_cmd->add_option("--plot", evaluation.plot,
+                       "Also draw the latency histogram and the rates into FILE.png or .svg");
+
+  dispel::apps::RenderCommandOptions render;
+  std::string render_config;
+  double render_from = 0.0, render_to = 0.0;
+  CLI::App* render_cmd = app.add_subcommand(
+      "render", "Draw a recording (filtered or not) as a map of all scans or one scan's objects");
+  render_cmd->add_option("input", render.job.input, "IN.bag")->required();
+  render_cmd->add_option("-o,--output", render.job.output, "OUT.png or OUT.svg to write")
+      ->required();
+  render_cmd->add_option("--view", render.job.view, "map (all scans) or scan (one scan)")
+      ->capture_default_str();
+  render_cmd
+      ->add_option("--scan-index", render.job.scan_index,
+                   "Scan view: which scan, 0-based among the scan topic's messages")
+      ->capture_default_str();
+  CLI::Option* from_opt = render_cmd->add_option(
+      "--from", render_from, "Map view: first scan drawn, seconds from the recording's start");
+  CLI::Option* to_opt = render_cmd->add_option(
+      "--to", render_to, "Map view: last scan drawn, seconds from the recording's start");
+  render_cmd
+      ->add_option("--frame", render.job.frame,
+                   "odom (odometry + laser mount) or truth (/ground_truth of dispel sim)")
+      ->capture_default_str();
+  render_cmd->add_option("--scan-topic", render.job.scan_topic, "LaserScan topic")
+      ->capture_default_str();
+  render_cmd->add_option("--odom-topic", render.job.odom_topic, "Odometry topic")
+      ->capture_default_str();
+  render_cmd->add_flag("--static-sensor", render.job.static_sensor,
+                       "The sensor does not move (no odometry needed)");
+  render_cmd->add_option("--config", render_config,
+                         "Scan view: YAML configuration of the segmentation and filter");
+  render_cmd->add_flag("--scale-to-scanner", render.job.scale_to_scanner,
+                       "Scan view: as dispel filter --scale-to-scanner");
+  render_cmd->add_option("--size", render.size, "Picture size WIDTHxHEIGHT (default 1600x1200)");
+
+  dispel::apps::OdomCommandOptions odom;
+  std::string odom_config, odom_model;
+  CLI::App* odom_cmd =
+      app.add_subcommand("odom", "Fuse wheel speeds and IMU yaw rate (UKF) into a trajectory CSV");
+  odom_cmd->add_option("input", odom.job.input, "IN.bag (or give --wheels-csv)");
+  odom_cmd->add_option("-o,--output", odom.job.output, "TRAJECTORY.csv to write")->required();
+  odom_cmd->add_option("--model", odom_model, "ct, ct_euler, omni or dead_reckoning")
+      ->check(CLI::IsMember({"ct", "ct_euler", "omni", "dead_reckoning"}));
+  odom_cmd->add_option("--config", odom_config, "YAML with an odometry: section");
+  odom_cmd->add_option("--wheels-csv", odom.job.wheels_csv, "W.csv with t,v_left,v_right");
+  odom_cmd->add_option("--imu-csv", odom.job.imu_csv, "I.csv with t,yaw_rate");
+  odom_cmd->add_option("--wheel-topic", odom.job.wheel_topic,
+                       "JointState or Odometry topic (default: /wheels or the only one)");
+  odom_cmd->add_option("--imu-topic", odom.job.imu_topic,
+                       "Imu topic (default: the only one), or none");
+  odom_cmd->add_option("--truth-topic", odom.job.truth_topic, "Odometry topic for --truth-csv")
+      ->capture_default_str();
+  odom_cmd->add_option("--truth-csv", odom.job.truth_csv,
+                       "Also write the truth topic as t,x,y,yaw here");
+  odom_cmd->add_flag("--json", odom.json, "Print statistics as JSON");
+
+  dispel::apps::EvalTrajectoryOptions eval_trajectory;
+  CLI::App* eval_trajectory_cmd = app.add_subcommand(
+      "eval-trajectory", "Compare a trajectory CSV with a true one (t,x,y,yaw columns)");
+  eval_trajectory_cmd->add_option("--truth", eval_trajectory.truth, "TRUTH.csv")->required();
+  eval_trajectory_cmd->add_option("--estimate", eval_trajectory.estimate, "TRAJECTORY.csv")
+      ->required();
+  eval_trajectory_cmd
+      ->add_option("--align-first", eval_trajectory.align_first_m,
+                   "Move the estimate rigidly onto the truth over its first METRES of path "
+                   "(for a truth in another frame, e.g. GPS)")
+      ->check(CLI::NonNegativeNumber);
+  eval_trajectory_cmd->add_flag("--json", eval_trajectory.json, "Print JSON");
+#endif
+
+#ifdef DISPEL_HAVE_SLAM
+  // Defined here for parsing and help; run by dispel-slam (which links MRPT, slow to load).
+  dispel::apps::SlamCli slam;
+  dispel::apps::add_slam_commands(app, slam);
+#endif
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    if (*bench_cmd) return dispel::apps::run_bench(bench);
+#ifdef DISPEL_HAVE_IO
+    if (*filter_cmd) {
+      if (!config_path.empty()) filter.job.config_path = config_path;
+      return dispel::apps::run_filter(filter);
+    }
+    if (*sim_cmd) return dispel::apps::run_sim(sim);
+    if (*eval_cmd) return dispel::apps::run_eval(evaluation);
+    if (*odom_cmd) {
+      if (!odom_config.empty()) odom.job.config_path = odom_config;
+      if (!odom_model.empty()) odom.job.model = odom_model;
+      return dispel::apps::run_odom(odom);
+    }
+    if (*eval_trajectory_cmd) return dispel::apps::run_eval_trajectory(eval_trajectory);
+    if (*render_cmd) {
+      if (!render_config.empty()) render.job.config_path = render_config;
+      if (from_opt->count() > 0) render.job.from_s = render_from;
+      if (to_opt->count() > 0) render.job.to_s = render_to;
+      return dispel::apps::run_render(render);
+    }
+#endif
+#ifdef DISPEL_HAVE_SLAM
+    if (dispel::apps::slam_command_chosen(slam)) return dispel::apps::exec_dispel_slam(argc, argv);
+#endif
+  } catch (const std::exception& e) {
+    std::cerr << "dispel: " << e.what() << "\n";
+    return 1;
+  }
+  std::cerr << "dispel: no command given\n" << app.help();
+  return 1;
+}

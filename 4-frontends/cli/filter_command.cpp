@@ -1,0 +1,158 @@
+#include "filter_command.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "dispel/io/atomic_file.hpp"
+
+namespace dispel::apps {
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+
+extern "C" void on_signal(int) { g_interrupted.store(true); }
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  const auto k = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5);
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::FilterJobStats& s) {
+  nlohmann::ordered_json j;
+  j["input"] = o.input;
+  j["output"] = o.output;
+  j["format"] = s.input_format;
+  j["messages_in"] = s.messages_in;
+  j["messages_out"] = s.messages_out;
+  nlohmann::ordered_json skipped = nlohmann::ordered_json::object();
+  std::int64_t skipped_total = 0;
+  for (const auto& [reason, n] : s.scans_skipped) {
+    skipped[reason] = n;
+    skipped_total += n;
+  }
+  j["scans"] = {{"total", s.scans},
+                {"processed", s.scans_filtered},
+                {"skipped", skipped_total},
+                {"skipped_by_reason", skipped}};
+  nlohmann::ordered_json events;
+  for (std::size_t e = 0; e < kFilterEventCount; ++e) {
+    events[filter_event_name(static_cast<FilterEvent>(e))] = s.counters.events[e];
+  }
+  j["events"] = events;
+  j["beams_removed"] = {{"dynamic", s.counters.beams_removed_dynamic},
+                        {"unknown", s.counters.beams_removed_unknown},
+                        {"fragments", s.counters.beams_removed_fragments}};
+  j["beams_kept_long_occupied"] = s.counters.beams_kept_long_occupied;
+  j["tracks_created"] = s.counters.tracks_created;
+  j["tracks_dropped"] = s.counters.tracks_dropped;
+  j["scan_time_us"] = {{"median", percentile(s.scan_time_s, 0.5) * 1e6},
+                       {"p99", percentile(s.scan_time_s, 0.99) * 1e6},
+                       {"max", percentile(s.scan_time_s, 1.0) * 1e6}};
+  j["config"] = {
+      {"min_points", s.config.segmentation.min_points},
+      {"cluster_gap_m", s.config.segmentation.cluster_gap_m},
+      {"presumption",
+       s.config.classification.presumption == Presumption::kGuilt ? "guilt" : "innocence"},
+      {"dynamic_weight_limit", s.config.classification.dynamic_weight_limit},
+      {"static_weight_limit", s.config.classification.static_weight_limit},
+      {"matching",
+       s.config.tracking.matching == Matching::kGlobal ? "global" : "nearest_neighbour"}};
+  if (s.input_format == "carmen") j["malformed_lines"] = s.malformed_lines;
+  j["odometry_refused"] = s.odometry_refused;
+  return j;
+}
+
+// A bar on stderr, redrawn only when the whole percent changes.
+class ProgressBar {
+ public:
+  void operator()(double fraction) {
+    const int percent = static_cast<int>(fraction * 100.0);
+    if (percent == last_) return;
+    last_ = percent;
+    const int filled = percent / 4;
+    std::fprintf(stderr, "\r[%-25s] %3d%%",
+                 std::string(static_cast<std::size_t>(filled), '#').c_str(), percent);
+    std::fflush(stderr);
+  }
+  void finish() const {
+    if (last_ >= 0) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  int last_ = -1;
+};
+
+}  // namespace
+
+int run_filter(FilterCommandOptions options) {
+  if (options.compression == "bz2") {
+    options.job.compression = jobs::Compression::kBz2;
+  } else if (options.compression == "lz4") {
+    options.job.compression = jobs::Compression::kLz4;
+  }
+  g_interrupted.store(false);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  ProgressBar bar;
+  jobs::Progress progress;
+  if (::isatty(STDERR_FILENO) != 0) progress = [&bar](double f) { bar(f); };
+
+  jobs::FilterJobStats stats;
+  try {
+    stats = jobs::run_filter_job(options.job, progress, &g_interrupted);
+  } catch (const jobs::JobCancelled&) {
+    bar.finish();
+    std::cerr << "dispel filter: interrupted; " << options.job.output << " was not written\n";
+    return 130;
+  } catch (const std::exception& e) {
+    bar.finish();
+    std::cerr << "dispel filter: " << e.what() << "\n";
+    return 1;
+  }
+  bar.finish();
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+
+  std::int64_t skipped = 0;
+  for (const auto& [reason, n] : stats.scans_skipped) skipped += n;
+  std::printf(
+      "dispel filter: %lld scans (%lld passed through unchanged), %lld dynamic and %lld unknown "
+      "beams removed, %lld tracks; %.1f us per scan (median), %.1f us (p99)\n"
+      "wrote %s: %lld messages\n",
+      static_cast<long long>(stats.scans), static_cast<long long>(skipped),
+      static_cast<long long>(stats.counters.beams_removed_dynamic),
+      static_cast<long long>(stats.counters.beams_removed_unknown),
+      static_cast<long long>(stats.counters.tracks_created),
+      percentile(stats.scan_time_s, 0.5) * 1e6, percentile(stats.scan_time_s, 0.99) * 1e6,
+      options.job.output.c_str(), static_cast<long long>(stats.messages_out));
+  for (const auto& [reason, n] : stats.scans_skipped) {
+    std::printf("  passed through: %lld scans, %s\n", static_cast<long long>(n), reason.c_str());
+  }
+
+  if (!options.stats_path.empty()) {
+    try {
+      io::AtomicFile file(options.stats_path);
+      {
+        std::ofstream out(file.temp_path());
+        out << stats_json(options.job, stats).dump(2) << "\n";
+        if (!out) throw std::runtime_error("cannot write " + file.temp_path());
+      }
+      file.commit();
+    } catch (const std::exception& e) {
+      std::cerr << "dispel filter: statistics not written: " << e.what() << "\n";
+      return 1;
+    }
+  }
+  return 0;
+}
+
+}  // namespace dispel::apps

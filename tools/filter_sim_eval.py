@@ -19,7 +19,13 @@ def main():
     for s in settings:
         key, value = s.split('=', 1)
         section, name = key.split('.', 1)
-        if re.search(r'^%s:\s*(#.*)?$' % section, text, re.M):
+        # A key the file already sets in that section is replaced (YAML keys must be unique).
+        block = re.search(r'^%s:\s*(#.*)?\n((?:[ \t]+.*\n|[ \t]*\n)*)' % section, text, re.M)
+        if block and re.search(r'^[ \t]+%s:' % re.escape(name), block.group(2), re.M):
+            body = re.sub(r'^([ \t]+)%s:.*$' % re.escape(name), r'\g<1>%s: %s' % (name, value),
+                          block.group(2), count=1, flags=re.M)
+            text = text[:block.start(2)] + body + text[block.end(2):]
+        elif re.search(r'^%s:\s*(#.*)?$' % section, text, re.M):
             text = re.sub(r'^(%s:\s*(#.*)?)$' % section, r'\1\n  %s: %s' % (name, value), text,
                           count=1, flags=re.M)
         else:
@@ -32,8 +38,15 @@ def main():
             sim, out = os.path.join(tmp, 'sim.bag'), os.path.join(tmp, 'filtered.bag')
             subprocess.run([dispel, 'sim', scenario, '-o', sim, '--seed', str(seed)], check=True,
                            stdout=subprocess.DEVNULL)
-            subprocess.run([dispel, 'filter', sim, '-o', out, '--config', cfg], check=True,
-                           stdout=subprocess.DEVNULL)
+            stats = os.path.join(tmp, 'stats.json')
+            subprocess.run([dispel, 'filter', sim, '-o', out, '--config', cfg, '--stats', stats],
+                           check=True, stdout=subprocess.DEVNULL)
+            used = json.load(open(stats))['config']
+            for s in settings:  # What the filter reports it used is what was asked for.
+                key, value = s.split('=', 1)
+                name = key.split('.', 1)[1]
+                if name in used and str(used[name]) != value:
+                    sys.exit('%s: the filter used %s = %s, not %s' % (config, name, used[name], value))
             runs.append(json.loads(subprocess.run(
                 [dispel, 'eval', '--truth', sim, '--result', out, '--json'], check=True,
                 capture_output=True, text=True).stdout))

@@ -66,9 +66,12 @@ class Binder {
   // Applies a mapping node; every key must be known.
   void apply(const YAML::Node& map, const std::string& prefix) const {
     if (!map.IsMap()) fail(origin_, (prefix.empty() ? "the file" : prefix) + " must be a mapping");
+    std::set<std::string> seen;
     for (const auto& item : map) {
       const auto name = item.first.as<std::string>();
       const std::string key = prefix.empty() ? name : prefix + "." + name;
+      // YAML would let the last of two equal keys win without a word.
+      if (!seen.insert(name).second) fail(origin_, "key '" + key + "' is given twice");
       const auto it = setters_.find(key);
       if (it == setters_.end()) {
         if (sections_.count(key) != 0) {

@@ -143,6 +143,9 @@ TEST(ConfigYaml, ValuesAreReadIntoTheirFields) {
 TEST(ConfigYaml, UnknownKeysWrongTypesAndBadValuesAreErrorsNamingTheKey) {
   expect_error("segmentation: {cluster_gapm: 0.1}", "unknown key 'segmentation.cluster_gapm'");
   expect_error("tracker: {}", "unknown key 'tracker'");
+  expect_error("tracking:\n  matching: global\n  matching: nearest_neighbour\n",
+               "key 'tracking.matching' is given twice");
+  expect_error("max_time_gap_s: 1\nmax_time_gap_s: 2\n", "key 'max_time_gap_s' is given twice");
   expect_error("segmentation: {cluster_gap_m: -0.1}", "segmentation.cluster_gap_m must be");
   expect_error("segmentation: {min_points: many}", "segmentation.min_points must be an integer");
   expect_error("tracking: {matching: psychic}", "tracking.matching must be one of");

@@ -20,9 +20,12 @@ class Reader {
   void keys(const YAML::Node& n, const std::string& path,
             const std::set<std::string>& allowed) const {
     if (!n.IsMap()) fail(path + " must be a mapping");
+    std::set<std::string> seen;
     for (const auto& item : n) {
       const auto k = item.first.as<std::string>();
-      if (allowed.count(k) == 0) fail("unknown key '" + (path.empty() ? k : path + "." + k) + "'");
+      const std::string key = path.empty() ? k : path + "." + k;
+      if (allowed.count(k) == 0) fail("unknown key '" + key + "'");
+      if (!seen.insert(k).second) fail("key '" + key + "' is given twice");
     }
   }
   double number(const YAML::Node& n, const std::string& path) const {

@@ -1,4 +1,4 @@
-// The simulator's scenarios load, its bags hold what DESIGN.md lists, and sim -> filter -> eval
+// The simulator's scenarios load, its bags hold the topics docs/simulator.md lists, and sim -> filter -> eval
 // runs end to end.
 #include <gtest/gtest.h>
 #include <rosbag/bag.h>
@@ -48,6 +48,8 @@ TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
     }
   };
   expect_error("lidar: {range_limt_m: 5}", "unknown key 'lidar.range_limt_m'");
+  expect_error("lidar:\n  range_limit_m: 5\n  range_limit_m: 6\n",
+               "key 'lidar.range_limit_m' is given twice");
   expect_error("lidar: {resolution_deg: 0}", "lidar.resolution_deg must be");
   expect_error("actors: [{type: dragon, standing: [0, 0]}]", "actors[0].type must be");
   expect_error("actors: [{type: person}]", "actors[0] needs waypoints or standing");

@@ -47,6 +47,16 @@ Layout make_layout(const Canvas& canvas) {
   return l;
 }
 
+Picture::Picture(const RenderOptions& o, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi,
+                 RenderResult& result)
+    : canvas(o.output, o.width_px, o.height_px),
+      layout(make_layout(canvas)),
+      transform(fit(layout, lo, hi)) {
+  result.transform = transform;
+  result.width_px = canvas.width();
+  result.height_px = canvas.height();
+}
+
 PixelTransform fit(const Layout& l, Eigen::Vector2d lo, Eigen::Vector2d hi) {
   Eigen::Vector2d size = (hi - lo).cwiseMax(Eigen::Vector2d(1.0, 1.0));
   const Eigen::Vector2d centre = 0.5 * (lo + hi);

@@ -32,6 +32,16 @@ struct Layout {
 
 /// @throws jobs::JobError when the picture is too small to draw in.
 Layout make_layout(const Canvas& canvas);
+
+/// A picture begun: the canvas of @p o's output and size, its layout, and the transform that fits
+/// the box [lo, hi] (metres) into the plot; @p result gets the size and the transform.
+struct Picture {
+  Picture(const RenderOptions& o, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi,
+          RenderResult& result);
+  Canvas canvas;
+  Layout layout;
+  PixelTransform transform;
+};
 /// Fits the box [lo, hi] (metres, padded by 4%) into the plot area with equal scales on x and y.
 PixelTransform fit(const Layout& l, Eigen::Vector2d lo, Eigen::Vector2d hi);
 void draw_frame(cairo_t* cr, const Layout& l);

@@ -232,14 +232,12 @@ RenderResult render_map(const Scene& scene, const RenderOptions& o,
     hi = hi.cwiseMax(bounds.hi());
   }
 
-  Canvas canvas(o.output, o.width_px, o.height_px);
+  Picture picture(o, lo, hi, result);
+  Canvas& canvas = picture.canvas;
   cairo_t* cr = canvas.cr();
   const double f = canvas.font_px();
-  const Layout l = make_layout(canvas);
-  const PixelTransform t = fit(l, lo, hi);
-  result.transform = t;
-  result.width_px = canvas.width();
-  result.height_px = canvas.height();
+  const Layout& l = picture.layout;
+  const PixelTransform& t = picture.transform;
   result.from_s = first_t;
   result.to_s = last_t;
 

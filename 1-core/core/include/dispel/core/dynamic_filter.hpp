@@ -20,8 +20,8 @@
 
 namespace dispel {
 
-/// Per-beam labels of the filtered scan (docs/dynamic_filter.md, "Beam labels"); the values are
-/// what <scan>_labels carries in its intensities.
+/// Per-beam labels of the filtered scan, what <scan>_labels carries in its intensities
+/// (docs/dynamic_filter.md, "Beam labels").
 enum class BeamLabel : std::uint8_t {
   kStatic = 0,    ///< Part of a static object: kept.
   kDynamic = 1,   ///< Part of a dynamic object: removed (NaN).

@@ -12,7 +12,7 @@
 
 namespace dispel::sim {
 
-/// Ground-truth code of a beam (DESIGN.md, "Beam codes").
+/// Ground-truth code of a beam, written in the intensities of /scan_truth (docs/simulator.md).
 enum class Truth : std::uint8_t {
   kStatic = 0,    ///< Static structure.
   kMoving = 1,    ///< A moving actor.

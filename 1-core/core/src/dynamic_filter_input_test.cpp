@@ -1,0 +1,172 @@
+// The dynamic filter on bad input: time going backwards, repeated stamps, pose jumps, no pose or a
+// pose that is not finite, scans that fail their checks, NaN ranges. Never a throw, always valid
+// labels, every case counted.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "dispel/core/dynamic_filter.hpp"
+#include "filter_scenes.hpp"
+
+namespace dispel {
+namespace {
+
+using namespace scenes;  // NOLINT: the scenes' vocabulary.
+
+// --- Bad input ----------------------------------------------------------------------------------
+
+void expect_sane(const FilterResult& r, const LaserScan& in) {
+  ASSERT_EQ(r.labels.size(), in.size());
+  for (BeamLabel l : r.labels) EXPECT_LE(static_cast<int>(l), 4);
+  ASSERT_EQ(r.filtered.size(), in.size());
+  for (const TrackedObject& t : r.tracks) {
+    EXPECT_TRUE(t.position_m.allFinite());
+    EXPECT_TRUE(t.velocity_mps.allFinite());
+  }
+}
+
+TEST(DynamicFilterInput, TimeGoingBackwardsResetsAndIsCounted) {
+  Scenario s;
+  s.walls = room(6.0, 5.0);
+  s.movers = {walker({3.0, -2.0}, {0.0, 1.0})};
+  DynamicFilter filter{DynamicFilterConfig{}};
+  run(s, filter, 40);
+  ASSERT_GT(filter.track_count(), 0u);
+  Frame f = render(s, 1.0);  // Earlier than the last scan (1.95 s).
+  const FilterResult r = filter.process(f.scan, f.pose);
+  EXPECT_EQ(r.event, FilterEvent::kResetTimeBackwards);
+  expect_sane(r, f.scan);
+  EXPECT_EQ(filter.counters().events[static_cast<int>(FilterEvent::kResetTimeBackwards)], 1);
+  // Tracks start again from this scan.
+  for (const TrackedObject& t : r.tracks) EXPECT_EQ(t.age_scans, 1);
+  f = render(s, 1.05);
+  EXPECT_EQ(filter.process(f.scan, f.pose).event, FilterEvent::kFiltered);
+}
+
+TEST(DynamicFilterInput, RepeatedStampLabelsFromTheTracksWithoutChangingThem) {
+  Scenario s;
+  s.walls = room(6.0, 5.0);
+  s.movers = {walker({3.0, -2.0}, {0.0, 1.2})};
+  DynamicFilter filter{DynamicFilterConfig{}};
+  run(s, filter, 60);
+  const Frame f = render(s, 59 * kPeriod);  // The same stamp as the last scan.
+  const std::size_t tracks = filter.track_count();
+  const FilterResult r = filter.process(f.scan, f.pose);
+  EXPECT_EQ(r.event, FilterEvent::kRepeatedStamp);
+  expect_sane(r, f.scan);
+  EXPECT_EQ(filter.track_count(), tracks);
+  const ScanStats st = stats_of(f, r);
+  EXPECT_GT(st.removed.at(1), st.beams.at(1) * 9 / 10);  // The walker is still removed.
+  EXPECT_EQ(st.removed.count(0), 0u);
+  EXPECT_EQ(filter.counters().events[static_cast<int>(FilterEvent::kRepeatedStamp)], 1);
+}
+
+TEST(DynamicFilterInput, PoseJumpResetsInsteadOfMakingTheWorldMove) {
+  Scenario s;
+  s.walls = room(6.0, 5.0);
+  s.pillars = {{{2.0, 1.0}, 0.3}};
+  DynamicFilter filter{DynamicFilterConfig{}};
+  run(s, filter, 20);
+  // Odometry jumps by 2 m (a reset of the fixed frame): the same scan, a different pose.
+  Frame f = render(s, 20 * kPeriod);
+  const FilterResult r = filter.process(f.scan, Pose2{2.0, 0.0, 0.0});
+  EXPECT_EQ(r.event, FilterEvent::kResetPoseJump);
+  expect_sane(r, f.scan);
+  // Continuing in the new frame, nothing is ever dynamic.
+  for (int k = 21; k < 80; ++k) {
+    f = render(s, k * kPeriod);
+    const FilterResult rk = filter.process(f.scan, Pose2{2.0, 0.0, 0.0});
+    EXPECT_EQ(rk.removed_dynamic, 0);
+  }
+}
+
+TEST(DynamicFilterInput, NonFinitePoseAndBadScansPassThroughUnchanged) {
+  Scenario s;
+  s.walls = room(6.0, 5.0);
+  DynamicFilter filter{DynamicFilterConfig{}};
+  run(s, filter, 10);
+  Frame f = render(s, 10 * kPeriod);
+  for (const Pose2& bad : {Pose2{std::nan(""), 0.0, 0.0}, Pose2{0.0, 0.0, INFINITY}}) {
+    const FilterResult r = filter.process(f.scan, bad);
+    EXPECT_EQ(r.event, FilterEvent::kRejectedPose);
+    expect_sane(r, f.scan);
+    for (std::size_t i = 0; i < f.scan.size(); ++i) {
+      const float a = r.filtered.ranges_m[i];
+      const float b = f.scan.ranges_m[i];
+      EXPECT_TRUE(a == b || (std::isnan(a) && std::isnan(b)));
+    }
+  }
+  LaserScan bad_scan = f.scan;
+  bad_scan.angle_increment_rad = 0.0;
+  bad_scan.stamp_s = 11 * kPeriod;
+  const FilterResult r = filter.process(bad_scan, Pose2{});
+  EXPECT_EQ(r.event, FilterEvent::kRejectedScan);
+  expect_sane(r, bad_scan);
+  for (BeamLabel l : r.labels) EXPECT_EQ(l, BeamLabel::kInvalid);
+  LaserScan empty;
+  empty.angle_increment_rad = 0.01;
+  empty.range_max_m = 10.0F;
+  EXPECT_EQ(filter.process(empty, Pose2{}).event, FilterEvent::kRejectedScan);
+  const FilterCounters& c = filter.counters();
+  EXPECT_EQ(c.events[static_cast<int>(FilterEvent::kRejectedPose)], 2);
+  EXPECT_EQ(c.rejected_by_issue[static_cast<int>(ScanIssue::kNonPositiveIncrement)], 1);
+  EXPECT_EQ(c.rejected_by_issue[static_cast<int>(ScanIssue::kEmpty)], 1);
+  // After rejections the filter carries on as before.
+  f = render(s, 12 * kPeriod);
+  EXPECT_EQ(filter.process(f.scan, f.pose).event, FilterEvent::kFiltered);
+}
+
+TEST(DynamicFilterInput, AScanWithoutAPoseIsPassedThroughAndTheTracksWaitForTheNext) {
+  Scenario s;
+  s.walls = room(6.0, 5.0);
+  s.movers = {walker({3.0, -3.0}, {0.0, 1.0})};
+  DynamicFilter filter{DynamicFilterConfig{}};
+  run(s, filter, 20);
+  const std::size_t tracks = filter.track_count();
+  const Frame f = render(s, 20 * kPeriod);
+  const FilterResult r = filter.process(f.scan, std::nullopt);
+  EXPECT_EQ(r.event, FilterEvent::kNoPose);
+  expect_sane(r, f.scan);
+  EXPECT_EQ(r.removed_dynamic, 0);
+  for (std::size_t i = 0; i < f.scan.size(); ++i) {
+    EXPECT_EQ(r.labels[i], f.scan.is_valid(i) ? BeamLabel::kNoObject : BeamLabel::kInvalid);
+  }
+  EXPECT_EQ(filter.track_count(), tracks);  // Kept, not reset.
+  EXPECT_EQ(filter.counters().events[static_cast<int>(FilterEvent::kNoPose)], 1);
+  EXPECT_STREQ(filter_event_name(FilterEvent::kNoPose), "no_pose");
+  const Frame next = render(s, 21 * kPeriod);
+  EXPECT_EQ(filter.process(next.scan, next.pose).event, FilterEvent::kFiltered);
+}
+
+TEST(DynamicFilterInput, NanRangesGiveValidLabels) {
+  Scenario s;
+  s.walls = room(6.0, 5.0);
+  DynamicFilter filter{DynamicFilterConfig{}};
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int k = 0; k < 30; ++k) {
+    Frame f = render(s, k * kPeriod);
+    for (float& r : f.scan.ranges_m) {
+      const double p = u(rng);
+      if (p < 0.2) r = std::numeric_limits<float>::quiet_NaN();
+      if (p > 0.95) r = -std::numeric_limits<float>::infinity();
+    }
+    const FilterResult r = filter.process(f.scan, f.pose);
+    expect_sane(r, f.scan);
+    for (std::size_t i = 0; i < f.scan.size(); ++i) {
+      if (!f.scan.is_valid(i)) {
+        EXPECT_EQ(r.labels[i], BeamLabel::kInvalid);
+      }
+    }
+  }
+}
+}  // namespace
+}  // namespace dispel

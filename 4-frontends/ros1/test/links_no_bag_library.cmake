@@ -1,0 +1,18 @@
+# A live node links what it needs: ldd of each node lists roscpp (so the check sees its libraries)
+# and no bag library (rosbag_storage) and no SLAM engine (MRPT).
+#   cmake -DNODES="<node>;<node>" -P links_no_bag_library.cmake
+foreach(node ${NODES})
+  execute_process(COMMAND ldd ${node} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "ldd ${node} failed (${rc}): ${err}")
+  endif()
+  if(NOT out MATCHES "libroscpp")
+    message(FATAL_ERROR "${node}: ldd lists no roscpp; is this a ROS node?\n${out}")
+  endif()
+  foreach(forbidden rosbag_storage libmrpt cairo)
+    if(out MATCHES "${forbidden}")
+      message(FATAL_ERROR "${node} links ${forbidden}:\n${out}")
+    endif()
+  endforeach()
+  message(STATUS "${node}: no bag library, no MRPT, no Cairo")
+endforeach()

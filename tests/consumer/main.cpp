@@ -1,5 +1,7 @@
-// Segments a small scan through the installed dispel::core; exits 0 when one object is found.
+// Segments a small scan through the installed dispel::core and filters it through the installed
+// dispel::pipeline; exits 0 when one object is found and the scan comes through filtered.
 #include <dispel/core/segmentation.hpp>
+#include <dispel/pipeline/scan_filter_runner.hpp>
 
 int main() {
   dispel::LaserScan scan;
@@ -10,5 +12,11 @@ int main() {
   scan.ranges_m.assign(50, 2.0F);
   dispel::Segmenter segmenter{dispel::SegmentationConfig{}};
   const dispel::Segmentation result = segmenter.segment(scan);
-  return result.issue == dispel::ScanIssue::kNone && result.objects.size() == 1 ? 0 : 1;
+  dispel::pipeline::ScanFilterRunner runner({});
+  const dispel::FilterResult& filtered = runner.process(scan, 0.0, dispel::Pose2{});
+  return result.issue == dispel::ScanIssue::kNone && result.objects.size() == 1 &&
+                 runner.last_outcome() == dispel::pipeline::ScanOutcome::kFiltered &&
+                 filtered.labels.size() == scan.size()
+             ? 0
+             : 1;
 }

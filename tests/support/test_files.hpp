@@ -2,7 +2,10 @@
 // Paths and files for tests: the source tree's data, gtest's temporary folder.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -13,8 +16,24 @@ inline std::string source_path(const std::string& relative) {
   return std::string(DISPEL_SOURCE_DIR) + "/" + relative;
 }
 
-/// A path in gtest's temporary folder.
-inline std::string temp_path(const std::string& name) { return ::testing::TempDir() + "/" + name; }
+/// This test process's own folder in gtest's temporary folder, removed when the process ends.
+/// ctest runs every TEST as a process of its own, several at a time: a file name shared by two
+/// tests in one folder would let one of them read or move the other's file.
+inline const std::string& temp_dir() {
+  static const std::string dir = [] {
+    const std::string d = ::testing::TempDir() + "/dispel_test_" + std::to_string(::getpid());
+    std::filesystem::create_directories(d);
+    std::atexit([] {
+      std::error_code ignored;
+      std::filesystem::remove_all(temp_dir(), ignored);
+    });
+    return d;
+  }();
+  return dir;
+}
+
+/// A path in this test process's temporary folder.
+inline std::string temp_path(const std::string& name) { return temp_dir() + "/" + name; }
 
 /// A file with @p text (bytes as given) in gtest's temporary folder; its path.
 inline std::string write_text(const std::string& name, const std::string& text) {

@@ -64,6 +64,7 @@ void filter_recorded_bag(const std::optional<std::string>& config, WallsAndWalke
   o.static_sensor = true;
   o.scale_to_scanner = true;
   if (config) o.config_path = source_path(*config);
+  // (temp_path is this test process's own: the two tests that call this may run at once.)
   const FilterJobStats stats = run_filter_job(o);
   EXPECT_EQ(stats.scans, 1265);
   EXPECT_EQ(stats.scans_filtered, 1265);

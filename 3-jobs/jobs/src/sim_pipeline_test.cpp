@@ -15,6 +15,7 @@
 #include "dispel/jobs/filter_job.hpp"
 #include "dispel/io/scenario_yaml.hpp"
 #include "dispel/jobs/sim_job.hpp"
+#include "test_files.hpp"
 
 namespace dispel::jobs {
 namespace {
@@ -60,7 +61,7 @@ TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
 TEST(SimPipeline, SimulatedBagHasEveryTopicAndFiltersAndEvaluates) {
   sim::Scenario s = load_scenario(scenario_path("thesis_hall"));
   const sim::SimulationOutput run = sim::simulate(s, 7, 10.0);
-  const std::string bag_path = ::testing::TempDir() + "/sim.bag";
+  const std::string bag_path = test::temp_dir() + "/sim.bag";
   write_simulation(run, s, bag_path);
   std::map<std::string, int> count;
   {
@@ -79,7 +80,7 @@ TEST(SimPipeline, SimulatedBagHasEveryTopicAndFiltersAndEvaluates) {
 
   FilterJobOptions o;
   o.input = bag_path;
-  o.output = ::testing::TempDir() + "/sim_filtered.bag";
+  o.output = test::temp_dir() + "/sim_filtered.bag";
   o.config_path = std::string(DISPEL_SOURCE_DIR) + "/config/default_masked.yaml";
   const FilterJobStats stats = run_filter_job(o);
   EXPECT_EQ(stats.scans_filtered, 201);
@@ -103,7 +104,7 @@ TEST(SimPipeline, SimulatedBagHasEveryTopicAndFiltersAndEvaluates) {
 // ones and finds a walker within a second (median); the thesis's filter, run on the same bags,
 // does not. Also the empty hall: with nobody there, every removed beam is a false positive.
 TEST(SimPipeline, DefaultConfigurationMeetsTheTargetsOnTheThesisHall) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = test::temp_dir();
   const auto filter_and_evaluate = [&](const std::string& bag, const std::string& config) {
     FilterJobOptions o;
     o.input = bag;

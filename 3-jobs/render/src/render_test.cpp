@@ -22,6 +22,7 @@
 #include "dispel/jobs/filter_job.hpp"
 #include "dispel/io/ros1_messages.hpp"
 #include "dispel/sim/raycast.hpp"
+#include "test_files.hpp"
 
 namespace dispel::render {
 namespace {
@@ -45,7 +46,7 @@ class FontCacheCleanup : public ::testing::Environment {
 const auto* const kFontCacheCleanup =
     ::testing::AddGlobalTestEnvironment(new FontCacheCleanup);  // gtest owns it.
 
-std::string temp_path(const std::string& name) { return ::testing::TempDir() + "/" + name; }
+using test::temp_path;  // This test process's own folder: ctest runs the tests at once.
 
 bool exists(const std::string& path) {
   struct stat st {};

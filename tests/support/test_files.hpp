@@ -20,16 +20,17 @@ inline std::string source_path(const std::string& relative) {
 /// ctest runs every TEST as a process of its own, several at a time: a file name shared by two
 /// tests in one folder would let one of them read or move the other's file.
 inline const std::string& temp_dir() {
-  static const std::string dir = [] {
-    const std::string d = ::testing::TempDir() + "/dispel_test_" + std::to_string(::getpid());
-    std::filesystem::create_directories(d);
+  // Never destroyed: the exit handler runs after the static objects are gone.
+  static const std::string* const dir = [] {
+    auto* d = new std::string(::testing::TempDir() + "/dispel_test_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(*d);
     std::atexit([] {
       std::error_code ignored;
       std::filesystem::remove_all(temp_dir(), ignored);
     });
     return d;
   }();
-  return dir;
+  return *dir;
 }
 
 /// A path in this test process's temporary folder.

@@ -21,7 +21,8 @@ int run_render(RenderCommandOptions options) {
   render::RenderResult result;
   try {
     if (!options.size.empty()) {
-      std::tie(options.job.width_px, options.job.height_px) = render::parse_image_size(options.size);
+      std::tie(options.job.width_px, options.job.height_px) =
+          render::parse_image_size(options.size);
     }
     g_interrupted.store(false);
     std::signal(SIGINT, on_render_signal);

@@ -5,10 +5,10 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
-#include "dispel/jobs/eval_job.hpp"
-#include "dispel/render/render.hpp"
 #include "dispel/io/scenario_yaml.hpp"
+#include "dispel/jobs/eval_job.hpp"
 #include "dispel/jobs/sim_job.hpp"
+#include "dispel/render/render.hpp"
 
 namespace dispel::apps {
 namespace {
@@ -54,7 +54,7 @@ int run_eval(const EvalOptions& o) {
     try {
       const auto name = [](const std::string& p) { return p.substr(p.find_last_of('/') + 1); };
       render::plot_evaluation(r, "dispel eval: " + name(o.result) + " against " + name(o.truth),
-                          o.plot);
+                              o.plot);
     } catch (const std::exception& e) {
       std::cerr << "dispel eval: " << e.what() << "\n";
       return 1;

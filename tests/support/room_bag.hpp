@@ -18,8 +18,8 @@
 
 #include "dispel/core/pose2.hpp"
 #include "dispel/eval/trajectory_error.hpp"
-#include "dispel/jobs/job.hpp"
 #include "dispel/io/ros1_messages.hpp"
+#include "dispel/jobs/job.hpp"
 #include "dispel/sim/raycast.hpp"
 #include "test_files.hpp"
 

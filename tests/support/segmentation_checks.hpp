@@ -49,7 +49,8 @@ inline std::vector<std::vector<std::int32_t>> beams_by_object(const Segmentation
 }
 
 // The object whose centroid is nearest to p.
-inline const ScanObject* object_near(const Segmentation& seg, const Eigen::Vector2d& p, double tol) {
+inline const ScanObject* object_near(const Segmentation& seg, const Eigen::Vector2d& p,
+                                     double tol) {
   const ScanObject* best = nullptr;
   for (const ScanObject& o : seg.objects) {
     if ((o.centroid_m - p).norm() <= tol &&
@@ -69,7 +70,7 @@ inline Eigen::Vector2d point_of(const LaserScan& scan, std::int32_t i) {
 // beams of an object are joined by gaps of at most eps (in bearing order, wrapping on full
 // circles) except where clusters were merged, and edge points are the points of the edge beams.
 inline void expect_consistent(const LaserScan& scan, const Segmentation& seg,
-                       const SegmentationConfig& config) {
+                              const SegmentationConfig& config) {
   ASSERT_EQ(seg.issue, ScanIssue::kNone);
   ASSERT_EQ(seg.beam_labels.size(), scan.size());
   const auto beams = beams_by_object(seg);
@@ -124,6 +125,5 @@ inline void expect_consistent(const LaserScan& scan, const Segmentation& seg,
     }
   }
 }
-
 
 }  // namespace dispel::segmentation_checks

@@ -98,7 +98,6 @@ TEST(DynamicFilterDefaults, SomeoneWalkingOutOfTheDarkIntoSpaceSeenEmptyIsRemove
   EXPECT_GE(slow, fast + 6);
 }
 
-
 // --- Recorded data ------------------------------------------------------------------------------
 
 struct RecordedScore {
@@ -215,7 +214,8 @@ TEST(ScaleToScanner, KeepsTheThesisScannerAndRejectsBadArguments) {
   const DynamicFilterConfig fine = scale_to_scanner(thesis_config(), 0.25 * kDeg / 3.0, 0.025);
   EXPECT_EQ(fine.segmentation.min_points, 16);
   EXPECT_EQ(fine.classification.dynamic_weight_limit, 36);
-  const DynamicFilterConfig dispel = scale_to_scanner(DynamicFilterConfig{}, 0.25 * kDeg / 3.0, 0.025);
+  const DynamicFilterConfig dispel =
+      scale_to_scanner(DynamicFilterConfig{}, 0.25 * kDeg / 3.0, 0.025);
   EXPECT_EQ(dispel.classification.dynamic_weight_limit, 16);
   EXPECT_EQ(dispel.classification.still_scans_to_static, 200);
   EXPECT_THROW(scale_to_scanner(DynamicFilterConfig{}, 0.0, 0.05), std::invalid_argument);

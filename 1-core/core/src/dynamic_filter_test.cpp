@@ -1,6 +1,8 @@
 // The dynamic filter on scripted scenes ray-cast at 20 Hz with the thesis's scanner: what each
 // of the thesis's mechanisms (and dispel's rules beside them) must do. Recorded data and
 // dispel's default: dynamic_filter_defaults_test.cpp; bad input: dynamic_filter_input_test.cpp.
+#include "dispel/core/dynamic_filter.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,7 +15,6 @@
 #include <string>
 #include <vector>
 
-#include "dispel/core/dynamic_filter.hpp"
 #include "filter_scenes.hpp"
 
 namespace dispel {
@@ -208,7 +209,6 @@ TEST(DynamicFilter, GuiltRemovesANewObjectUntilItHasBeenStillForLsScans) {
   }
   EXPECT_EQ(filter.counters().beams_removed_dynamic, 0);
 }
-
 
 // Two people walk past each other; the farther one is hidden by the nearer one for a few scans.
 // Returns for each mover the set of track ids that followed it, before and after they passed.

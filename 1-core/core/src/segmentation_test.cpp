@@ -1,6 +1,8 @@
 // Segmentation (thesis section 3.2.1): its configuration and input checks, and the pass on
 // scripted scenes. 360-degree scanners, the gap metric, edges and recorded scans:
 // segmentation_scanners_test.cpp.
+#include "dispel/core/segmentation.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,7 +15,6 @@
 #include <string>
 #include <vector>
 
-#include "dispel/core/segmentation.hpp"
 #include "scan_csv.hpp"
 #include "segmentation_checks.hpp"
 

@@ -223,7 +223,8 @@ void DynamicFilter::associate_global(double stamp_s) {
     }
     const std::vector<int> col = min_cost_assignment(cost_, n);
     for (int r = 0; r < no; ++r) {
-      if (col[r] < nt && cost_[r * n + col[r]] < forbidden) track_of_object_[objs[r]] = trks[col[r]];
+      if (col[r] < nt && cost_[r * n + col[r]] < forbidden)
+        track_of_object_[objs[r]] = trks[col[r]];
     }
     begin = end;
   }

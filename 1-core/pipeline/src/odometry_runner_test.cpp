@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -75,8 +75,7 @@ TEST(OdometryRunner, WithoutAWindowLateMeasurementsAreRejectedAsOutOfOrder) {
     s.imu ? runner.add_imu(s.t_s, s.a) : runner.add_wheels(s.t_s, s.a, s.b);
     runner.release();
   }
-  EXPECT_GT(runner.counters().imu[static_cast<int>(OdometryEvent::kRejectedOutOfOrder)],
-            0);
+  EXPECT_GT(runner.counters().imu[static_cast<int>(OdometryEvent::kRejectedOutOfOrder)], 0);
 }
 
 TEST(OdometryRunner, OneEstimatePerStampAndNonFiniteStampsCounted) {
@@ -95,8 +94,7 @@ TEST(OdometryRunner, OneEstimatePerStampAndNonFiniteStampsCounted) {
   EXPECT_EQ(fused(runner.counters().imu), 1);
   runner.add_wheels(std::nan(""), 1.0, 1.0);
   EXPECT_EQ(runner.pending(), 0u);
-  EXPECT_EQ(runner.counters().wheels[static_cast<int>(OdometryEvent::kRejectedNonFinite)],
-            1);
+  EXPECT_EQ(runner.counters().wheels[static_cast<int>(OdometryEvent::kRejectedNonFinite)], 1);
   EXPECT_TRUE(runner.release().empty());
 }
 

@@ -15,9 +15,9 @@ TEST(ScanPeriod, AGivenPeriodWinsOverWhatTheScansSay) {
 
 TEST(ScanPeriod, TheFirstStatedPeriodIsTaken) {
   ScanPeriod p;
-  EXPECT_EQ(p.add(10.0, 0.0), std::nullopt);   // States none.
-  EXPECT_EQ(p.add(10.1, 0.1), 0.1);            // The first that does.
-  EXPECT_EQ(p.add(10.2, 0.05), 0.1);           // Known: stays.
+  EXPECT_EQ(p.add(10.0, 0.0), std::nullopt);  // States none.
+  EXPECT_EQ(p.add(10.1, 0.1), 0.1);           // The first that does.
+  EXPECT_EQ(p.add(10.2, 0.05), 0.1);          // Known: stays.
   ScanPeriod bad;
   EXPECT_EQ(bad.add(10.0, std::nanf("")), std::nullopt);
   EXPECT_EQ(bad.add(10.1, -0.1), std::nullopt);

@@ -56,9 +56,8 @@ CsvColumns read_csv(const std::string& path, const std::vector<std::string>& wan
     if (blank(line)) continue;
     const auto cells = split(line);
     if (cells.size() != header.size()) {
-      throw InputError(path + ":" + std::to_string(number) + ": " +
-                       std::to_string(header.size()) + " values expected, got " +
-                       std::to_string(cells.size()));
+      throw InputError(path + ":" + std::to_string(number) + ": " + std::to_string(header.size()) +
+                       " values expected, got " + std::to_string(cells.size()));
     }
     std::vector<double> row;
     for (std::size_t i : index) {
@@ -94,7 +93,8 @@ void write_trajectory_csv(const std::string& path,
                           const std::vector<eval::TrajectoryPoint>& trajectory) {
   CsvWriter out(path);
   out.line("t,x,y,yaw");
-  for (const auto& p : trajectory) out.printf("%.9f,%.9g,%.9g,%.9g\n", p.t_s, p.x_m, p.y_m, p.yaw_rad);
+  for (const auto& p : trajectory)
+    out.printf("%.9f,%.9g,%.9g,%.9g\n", p.t_s, p.x_m, p.y_m, p.yaw_rad);
   out.commit();
 }
 

@@ -71,7 +71,8 @@ RecordingMotion read_motion(RecordingReader& reader, const MotionQuery& q,
       const std::optional<OdometryMessage> odom = msg.odometry();
       if (!odom) return;
       if (!have_pose_frames) {
-        if (!odom->child_frame_id.empty()) m.base_frame = FrameTree::normalise(odom->child_frame_id);
+        if (!odom->child_frame_id.empty())
+          m.base_frame = FrameTree::normalise(odom->child_frame_id);
         if (!odom->header.frame_id.empty()) {
           m.fixed_frame = FrameTree::normalise(odom->header.frame_id);
         }
@@ -80,8 +81,7 @@ RecordingMotion read_motion(RecordingReader& reader, const MotionQuery& q,
       if (!m.base_poses.add(odom->header.stamp.seconds(), odom->pose)) ++m.poses_refused;
     } else if (const std::optional<TransformsMessage> tf = msg.transforms()) {
       for (const FrameTransform& t : tf->transforms) {
-        edges[{FrameTree::normalise(t.parent), FrameTree::normalise(t.child)}] =
-            t.child_in_parent;
+        edges[{FrameTree::normalise(t.parent), FrameTree::normalise(t.child)}] = t.child_in_parent;
       }
     }
   });

@@ -19,9 +19,10 @@ using Payload = std::variant<ScanMessage, OdometryMessage, TransformsMessage>;
 class MemoryRecording final : public RecordingReader {
  public:
   void add(const std::string& topic, double t, Payload p) {
-    const MessageKind kind = std::holds_alternative<ScanMessage>(p)       ? MessageKind::kLaserScan
-                             : std::holds_alternative<OdometryMessage>(p) ? MessageKind::kOdometry
-                                                                          : MessageKind::kTransforms;
+    const MessageKind kind = std::holds_alternative<ScanMessage>(p) ? MessageKind::kLaserScan
+                             : std::holds_alternative<OdometryMessage>(p)
+                                 ? MessageKind::kOdometry
+                                 : MessageKind::kTransforms;
     messages_.push_back({topic, Stamp::from_seconds(t), kind, std::move(p)});
     std::map<std::string, TopicInfo> topics = topics_.all();
     TopicInfo& info = topics[topic];

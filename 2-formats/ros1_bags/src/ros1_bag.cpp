@@ -107,8 +107,8 @@ Ros1BagReader::Ros1BagReader(const std::string& path) : impl_(std::make_unique<I
       topics[c->topic] = {c->datatype, kind_of(c->datatype), 0};
     }
     for (auto& [topic, info] : topics) {
-      info.messages = static_cast<std::int64_t>(
-          rosbag::View(impl_->bag, rosbag::TopicQuery(topic)).size());
+      info.messages =
+          static_cast<std::int64_t>(rosbag::View(impl_->bag, rosbag::TopicQuery(topic)).size());
     }
     impl_->topics = Topics(std::move(topics));
     if (all.size() > 0) {
@@ -139,9 +139,8 @@ void Ros1BagReader::read(const std::vector<std::string>& topics,
   });
   rosbag::View::iterator it = reading(path, [&] { return view->begin(); });
   while (!reading(path, [&] { return it == view->end(); })) {
-    const rosbag::MessageInstance& m = reading(path, [&]() -> rosbag::MessageInstance& {
-      return *it;
-    });
+    const rosbag::MessageInstance& m =
+        reading(path, [&]() -> rosbag::MessageInstance& { return *it; });
     const Ros1Message message(m, path, impl_->topics.all().at(m.getTopic()).kind);
     try {
       visit(message);
@@ -221,14 +220,12 @@ void Ros1BagWriter::write(const std::string& topic, Stamp time, const OdometryMe
   ++written_;
 }
 
-void Ros1BagWriter::write(const std::string& topic, Stamp time,
-                          const TransformsMessage& message) {
+void Ros1BagWriter::write(const std::string& topic, Stamp time, const TransformsMessage& message) {
   impl_->write(topic, time, to_ros(message));
   ++written_;
 }
 
-void Ros1BagWriter::write(const std::string& topic, Stamp time,
-                          const JointStateMessage& message) {
+void Ros1BagWriter::write(const std::string& topic, Stamp time, const JointStateMessage& message) {
   impl_->write(topic, time, to_ros(message));
   ++written_;
 }

@@ -81,9 +81,9 @@ sensor_msgs::LaserScan to_ros(const LaserScan& scan, const std::string& frame_id
   m.header.stamp = Stamp::from_seconds(scan.stamp_s);
   m.header.frame_id = frame_id;
   m.scan = scan;
-  m.angle_max = static_cast<float>(
-      scan.angle_min_rad +
-      scan.angle_increment_rad * static_cast<double>(scan.size() > 0 ? scan.size() - 1 : 0));
+  m.angle_max = static_cast<float>(scan.angle_min_rad +
+                                   scan.angle_increment_rad *
+                                       static_cast<double>(scan.size() > 0 ? scan.size() - 1 : 0));
   return to_ros(m);
 }
 

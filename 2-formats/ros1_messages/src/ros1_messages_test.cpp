@@ -84,8 +84,8 @@ TEST(Ros1Messages, EveryMessageRoundTripsThroughTheRecordingModel) {
   EXPECT_EQ(std::memcmp(back.ranges.data(), scan.ranges.data(), 4 * sizeof(float)), 0);
   EXPECT_EQ(back.intensities, scan.intensities);
 
-  const nav_msgs::Odometry od = to_ros_odometry(12.5, "odom", "base_link", {1.0, 2.0, 0.3}, 0.4,
-                                                -0.2);
+  const nav_msgs::Odometry od =
+      to_ros_odometry(12.5, "odom", "base_link", {1.0, 2.0, 0.3}, 0.4, -0.2);
   const OdometryMessage om = to_message(od);
   EXPECT_EQ(om.child_frame_id, "base_link");
   EXPECT_NEAR(om.pose.yaw_rad, 0.3, 1e-12);
@@ -93,8 +93,8 @@ TEST(Ros1Messages, EveryMessageRoundTripsThroughTheRecordingModel) {
   EXPECT_EQ(om.w_radps, -0.2);
   EXPECT_EQ(to_ros(om).header.stamp, od.header.stamp);
 
-  tf2_msgs::TFMessage tf = to_ros(TransformsMessage{{{Stamp{5, 1}, "base_link", "laser",
-                                                      {0.2, -0.1, 0.5}}}});
+  tf2_msgs::TFMessage tf =
+      to_ros(TransformsMessage{{{Stamp{5, 1}, "base_link", "laser", {0.2, -0.1, 0.5}}}});
   const TransformsMessage tm = to_message(tf);
   ASSERT_EQ(tm.transforms.size(), 1u);
   EXPECT_EQ(tm.transforms[0].stamp, (Stamp{5, 1}));

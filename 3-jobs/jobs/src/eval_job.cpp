@@ -48,8 +48,7 @@ eval::Rates evaluate_bags(const std::string& truth_bag, const std::string& resul
     const LaserScan& rs = r->second.scan;
     if (rs.ranges_m.size() != n) {
       throw JobError(result_bag + ": scan at " + std::to_string(stamp.seconds()) + " has " +
-                     std::to_string(rs.ranges_m.size()) + " beams, the truth " +
-                     std::to_string(n));
+                     std::to_string(rs.ranges_m.size()) + " beams, the truth " + std::to_string(n));
     }
     std::vector<std::uint8_t> codes(n);
     std::vector<std::int32_t> ids(n, 0);

@@ -50,8 +50,8 @@ class ScanFilter {
         ++stats_.scans_filtered;
         break;
       case pipeline::ScanOutcome::kBadScan:
-        ++stats_.scans_skipped[std::string("bad_scan_") +
-                               scan_issue_name(result.segmentation.issue)];
+        ++stats_
+              .scans_skipped[std::string("bad_scan_") + scan_issue_name(result.segmentation.issue)];
         break;
       case pipeline::ScanOutcome::kBadPose:
         ++stats_.scans_skipped["bad_pose"];
@@ -188,11 +188,12 @@ FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
       msg.header.stamp = io::Stamp::from_seconds(cs.scan.stamp_s);
       msg.header.frame_id = cs.kind == "RLASER" ? "rear_laser" : "laser";
       msg.scan = cs.scan;
-      msg.angle_max = static_cast<float>(
-          cs.scan.angle_min_rad +
-          cs.scan.angle_increment_rad * static_cast<double>(cs.scan.size() > 0 ? cs.scan.size() - 1 : 0));
-      const FilterResult& result = filter.process(
-          cs.scan, 0.0, o.static_sensor ? Pose2{} : cs.laser_pose, "no_pose");
+      msg.angle_max =
+          static_cast<float>(cs.scan.angle_min_rad +
+                             cs.scan.angle_increment_rad *
+                                 static_cast<double>(cs.scan.size() > 0 ? cs.scan.size() - 1 : 0));
+      const FilterResult& result =
+          filter.process(cs.scan, 0.0, o.static_sensor ? Pose2{} : cs.laser_pose, "no_pose");
       out->write(o.scan_topic, msg.header.stamp, msg);
       write_outputs(*out, o.scan_topic, msg.header.stamp, msg, result);
       if (progress && i % 64 == 0) {

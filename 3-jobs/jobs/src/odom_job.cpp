@@ -44,8 +44,8 @@ Sources choose_topics(const OdomJobOptions& o, const io::Topics& topics) {
   s.wheels_from_odometry = topics.has(s.wheels, MessageKind::kOdometry);
   if (!s.wheels_from_odometry && !topics.has(s.wheels, MessageKind::kJointState)) {
     throw JobError(o.input + ": no sensor_msgs/JointState or nav_msgs/Odometry topic " + s.wheels +
-                   " (JointState topics: " + list(joint_topics) + "; Odometry topics: " +
-                   list(odom_topics) + ")");
+                   " (JointState topics: " + list(joint_topics) +
+                   "; Odometry topics: " + list(odom_topics) + ")");
   }
   s.imu = o.imu_topic;
   const auto imu_topics = topics.of_kind(MessageKind::kImu);
@@ -56,8 +56,8 @@ Sources choose_topics(const OdomJobOptions& o, const io::Topics& topics) {
                      "); choose one with --imu-topic, or --imu-topic none");
     }
   } else if (s.imu != "none" && !topics.has(s.imu, MessageKind::kImu)) {
-    throw JobError(o.input + ": no sensor_msgs/Imu topic " + s.imu + " (Imu topics: " +
-                   list(imu_topics) + ")");
+    throw JobError(o.input + ": no sensor_msgs/Imu topic " + s.imu +
+                   " (Imu topics: " + list(imu_topics) + ")");
   }
   if (s.imu == "none") s.imu.clear();
   s.truth_is_gps = topics.has(o.truth_topic, MessageKind::kNavSatFix);
@@ -99,8 +99,8 @@ class GpsTrack {
 // Reads the bag's wheels, IMU and truth into the runner (and the truth into @p truth); returns the
 // number of wheel measurements.
 std::int64_t read_bag(const OdomJobOptions& o, const io::OdometrySettings& settings,
-              pipeline::OdometryRunner& runner, OdomJobStats& stats,
-              std::vector<eval::TrajectoryPoint>& truth) {
+                      pipeline::OdometryRunner& runner, OdomJobStats& stats,
+                      std::vector<eval::TrajectoryPoint>& truth) {
   const std::unique_ptr<io::RecordingReader> in = open_recording(o.input);
   const Sources s = choose_topics(o, in->topics());
   stats.wheel_source = s.wheels;
@@ -200,14 +200,13 @@ OdomJobStats run_odom_job(const OdomJobOptions& o) {
                     : odometry_model_name(settings.filter.model);
   stats.track_width_m = settings.filter.track_width_m;
   // The whole recording is sorted by stamp: an infinite reordering window, one flush.
-  pipeline::OdometryRunner runner =
-      as_job([&] {
-        return pipeline::OdometryRunner(settings.filter,
-                                        std::numeric_limits<double>::infinity(), engine);
-      });
+  pipeline::OdometryRunner runner = as_job([&] {
+    return pipeline::OdometryRunner(settings.filter, std::numeric_limits<double>::infinity(),
+                                    engine);
+  });
   std::vector<eval::TrajectoryPoint> truth;
-  const std::int64_t wheels = o.input.empty() ? read_csvs(o, runner, stats)
-                                              : read_bag(o, settings, runner, stats, truth);
+  const std::int64_t wheels =
+      o.input.empty() ? read_csvs(o, runner, stats) : read_bag(o, settings, runner, stats, truth);
   if (wheels == 0) throw JobError(stats.wheel_source + ": no wheel speeds");
   stats.stamps_out_of_order = runner.arrived_out_of_order();
 

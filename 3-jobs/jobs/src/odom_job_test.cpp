@@ -17,8 +17,8 @@
 
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/csv.hpp"
-#include "dispel/jobs/filter_job.hpp"
 #include "dispel/io/scenario_yaml.hpp"
+#include "dispel/jobs/filter_job.hpp"
 #include "dispel/jobs/sim_job.hpp"
 #include "test_files.hpp"
 

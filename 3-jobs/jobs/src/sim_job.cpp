@@ -36,10 +36,10 @@ void write_simulation(const sim::SimulationOutput& run, const sim::Scenario& sce
         msg.header.stamp = io::Stamp::from_seconds(f.scan.stamp_s);
         msg.header.frame_id = "laser";
         msg.scan = f.scan;
-        msg.angle_max = static_cast<float>(
-            f.scan.angle_min_rad +
-            f.scan.angle_increment_rad *
-                static_cast<double>(f.scan.size() > 0 ? f.scan.size() - 1 : 0));
+        msg.angle_max =
+            static_cast<float>(f.scan.angle_min_rad +
+                               f.scan.angle_increment_rad *
+                                   static_cast<double>(f.scan.size() > 0 ? f.scan.size() - 1 : 0));
         msg.scan_time = static_cast<float>(1.0 / scenario.lidar.rate_hz);
         out->write("/scan", msg.header.stamp, msg);
         msg.scan.intensities.resize(f.truth.size());
@@ -56,7 +56,8 @@ void write_simulation(const sim::SimulationOutput& run, const sim::Scenario& sce
     for (const sim::SensorSample& s : run.sensors) {
       write_scans_until(s.stamp_s);
       const io::Stamp t = io::Stamp::from_seconds(s.stamp_s);
-      out->write("/odom", t, odometry(s.stamp_s, "odom", s.odom_pose, s.odom_v_mps, s.odom_w_radps));
+      out->write("/odom", t,
+                 odometry(s.stamp_s, "odom", s.odom_pose, s.odom_v_mps, s.odom_w_radps));
       out->write("/ground_truth", t,
                  odometry(s.stamp_s, "map", s.true_pose, s.true_v_mps, s.true_w_radps));
       io::JointStateMessage wheels;

@@ -1,5 +1,5 @@
-// The simulator's scenarios load, its bags hold the topics docs/simulator.md lists, and sim -> filter -> eval
-// runs end to end.
+// The simulator's scenarios load, its bags hold the topics docs/simulator.md lists, and sim ->
+// filter -> eval runs end to end.
 #include <gtest/gtest.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -11,9 +11,9 @@
 #include <utility>
 #include <vector>
 
+#include "dispel/io/scenario_yaml.hpp"
 #include "dispel/jobs/eval_job.hpp"
 #include "dispel/jobs/filter_job.hpp"
-#include "dispel/io/scenario_yaml.hpp"
 #include "dispel/jobs/sim_job.hpp"
 #include "test_files.hpp"
 

@@ -207,7 +207,7 @@ RenderResult render_map(const Scene& scene, const RenderOptions& o,
       });
   if (in_window == 0) {
     throw jobs::JobError(o.input + ": no scans on " + topic + " " + window +
-                   " from the start (the recording spans 0 to " + seconds_text(span) + ")");
+                         " from the start (the recording spans 0 to " + seconds_text(span) + ")");
   }
   if (result.scans_drawn == 0) {
     throw jobs::JobError(o.input + ": none of the " + std::to_string(in_window) + " scans " +
@@ -300,8 +300,8 @@ RenderResult render_map(const Scene& scene, const RenderOptions& o,
             base_name(o.input) + " \u2014 " + seconds_text(first_t) + " to " +
                 seconds_text(last_t) + " of " + seconds_text(span),
             1.4 * f, TextAlign::kLeft, true);
-  std::string sub = "map, frame: " + scene.description + "; " +
-                    std::to_string(result.scans_drawn) + " scans on " + topic;
+  std::string sub = "map, frame: " + scene.description + "; " + std::to_string(result.scans_drawn) +
+                    " scans on " + topic;
   if (result.scans_without_pose > 0) {
     sub += " (" + std::to_string(result.scans_without_pose) + " without a pose left out)";
   }

@@ -6,8 +6,8 @@
 #include <cstdlib>
 
 #include "dispel/jobs/job.hpp"
-#include "dispel/render/render.hpp"
 #include "dispel/render/canvas.hpp"
+#include "dispel/render/render.hpp"
 
 namespace dispel::render {
 namespace {
@@ -192,8 +192,9 @@ PlotLayout rate_bars(cairo_t* cr, Panel p, const eval::Rates& r, double f) {
 PlotLayout plot_evaluation(const eval::Rates& rates, const std::string& title,
                            const std::string& output, int width_px, int height_px) {
   if (width_px < 200 || height_px < 200 || width_px > 10000 || height_px > 10000) {
-    throw jobs::JobError("picture size " + std::to_string(width_px) + "x" + std::to_string(height_px) +
-                   " out of range (200 to 10000 pixels each way)");
+    throw jobs::JobError("picture size " + std::to_string(width_px) + "x" +
+                         std::to_string(height_px) +
+                         " out of range (200 to 10000 pixels each way)");
   }
   Canvas canvas(output, width_px, height_px);
   cairo_t* cr = canvas.cr();
@@ -214,8 +215,9 @@ PlotLayout plot_evaluation(const eval::Rates& rates, const std::string& title,
 std::pair<int, int> parse_image_size(const std::string& text) {
   const auto x = text.find_first_of("xX");
   const auto bad = [&text]() {
-    return jobs::JobError("picture size '" + text +
-                    "' is not WIDTHxHEIGHT in pixels, each from 200 to 10000 (e.g. 1600x1200)");
+    return jobs::JobError(
+        "picture size '" + text +
+        "' is not WIDTHxHEIGHT in pixels, each from 200 to 10000 (e.g. 1600x1200)");
   };
   if (x == std::string::npos) throw bad();
   const std::string w = text.substr(0, x), h = text.substr(x + 1);

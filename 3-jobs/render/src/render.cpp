@@ -61,8 +61,8 @@ RenderResult render_bag(const RenderOptions& o, const std::atomic<bool>* cancel)
                      " (0 to " + std::to_string(count - 1) + ")");
     }
   }
-  scene.motion =
-      jobs::as_job([&] { return io::read_motion(*in, query, [&] { jobs::check_cancelled(cancel); }); });
+  scene.motion = jobs::as_job(
+      [&] { return io::read_motion(*in, query, [&] { jobs::check_cancelled(cancel); }); });
   if (scene.motion.static_sensor) {
     scene.description = "static sensor (identity pose)";
   } else {

@@ -19,8 +19,8 @@
 
 #include "dispel/core/dynamic_filter.hpp"
 #include "dispel/core/segmentation.hpp"
-#include "dispel/jobs/filter_job.hpp"
 #include "dispel/io/ros1_messages.hpp"
+#include "dispel/jobs/filter_job.hpp"
 #include "dispel/sim/raycast.hpp"
 #include "test_files.hpp"
 

@@ -185,12 +185,12 @@ RenderResult render_scan(const Scene& scene, const RenderOptions& o,
             base_name(o.input) + " \u2014 scan " + std::to_string(o.scan_index) + " at " +
                 format_number(scan_t, 2) + " s",
             1.4 * f, TextAlign::kLeft, true);
-  const std::string sub =
-      "scan, sensor frame (x right, y up); " + std::to_string(seg.objects.size()) +
-      " objects (eps " + format_number(config.segmentation.cluster_gap_m, 3) + " m, N_min " +
-      std::to_string(config.segmentation.min_points) + "), " +
-      std::to_string(result.tracks.size()) + " tracks (" + scene.description + ")" +
-      (have_pose ? "" : "; no pose for this scan, so no tracks");
+  const std::string sub = "scan, sensor frame (x right, y up); " +
+                          std::to_string(seg.objects.size()) + " objects (eps " +
+                          format_number(config.segmentation.cluster_gap_m, 3) + " m, N_min " +
+                          std::to_string(config.segmentation.min_points) + "), " +
+                          std::to_string(result.tracks.size()) + " tracks (" + scene.description +
+                          ")" + (have_pose ? "" : "; no pose for this scan, so no tracks");
   draw_text(cr, l.plot_x, l.subtitle_y, sub, 0.9 * f, TextAlign::kLeft, false, {80, 80, 80});
   double x = l.plot_x;
   for (std::size_t i = 0; i < 3; ++i) {

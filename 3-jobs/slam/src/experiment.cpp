@@ -10,9 +10,9 @@
 #include <system_error>
 
 #include "dispel/io/config_yaml.hpp"
+#include "dispel/io/scenario_yaml.hpp"
 #include "dispel/jobs/eval_job.hpp"
 #include "dispel/jobs/filter_job.hpp"
-#include "dispel/io/scenario_yaml.hpp"
 #include "dispel/jobs/sim_job.hpp"
 #include "dispel/sim/simulator.hpp"
 #include "dispel/slam/icp_slam.hpp"

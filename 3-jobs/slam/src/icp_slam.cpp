@@ -13,7 +13,7 @@
 #include <sstream>
 #include <utility>
 
-#include "bag_input.hpp"
+#include "slam_input.hpp"
 #include "dispel/core/pose_buffer.hpp"
 #include "dispel/jobs/job.hpp"
 

@@ -136,7 +136,7 @@ std::vector<MapPoint> IcpSlamEngine::map_points() const {
 GridMap IcpSlamEngine::grid_map(double resolution_m) const {
   if (!(resolution_m > 0.0) || !std::isfinite(resolution_m)) {
     throw jobs::JobError("map resolution " + std::to_string(resolution_m) +
-                       " m: must be a positive number of metres per cell");
+                         " m: must be a positive number of metres per cell");
   }
   const auto res = static_cast<float>(resolution_m);
   mrpt::maps::COccupancyGridMap2D grid(-1.0F, 1.0F, -1.0F, 1.0F, res);

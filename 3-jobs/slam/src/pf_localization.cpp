@@ -1,13 +1,12 @@
 // dispel::slam: particle-filter localisation over a ROS 1 bag in a known map. No MRPT here: it
 // lives in pf_localization_engine.cpp.
 
-
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
 
-#include "bag_input.hpp"
+#include "slam_input.hpp"
 #include "dispel/core/pose_buffer.hpp"
 #include "dispel/jobs/job.hpp"
 #include "dispel/slam/localization.hpp"

@@ -10,8 +10,8 @@ FilterNodeCore::Output FilterNodeCore::process(const sensor_msgs::LaserScan& msg
   LaserScan core = scan.scan;
   if (msg.header.stamp.isZero()) core.stamp_s = stamp_s;
   const FilterResult& result = runner_.process(core, scan.scan_time, sensor_pose);
-  return {io::to_ros(io::filtered_message(scan, result)), io::to_ros(io::labels_message(scan, result)),
-          &result};
+  return {io::to_ros(io::filtered_message(scan, result)),
+          io::to_ros(io::labels_message(scan, result)), &result};
 }
 
 }  // namespace dispel::ros1

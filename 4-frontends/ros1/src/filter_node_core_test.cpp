@@ -69,9 +69,10 @@ std::int64_t expect_node_equals_dispel_filter(const std::string& bag, const std:
   EXPECT_EQ(node.runner().config().segmentation.min_points, stats.config.segmentation.min_points);
   EXPECT_EQ(node.runner().config().classification.dynamic_weight_limit,
             stats.config.classification.dynamic_weight_limit);
-  EXPECT_EQ(node.runner().counts().waiting_period, stats.scans_skipped.count("waiting_for_scan_period")
-                                                       ? stats.scans_skipped.at("waiting_for_scan_period")
-                                                       : 0);
+  EXPECT_EQ(node.runner().counts().waiting_period,
+            stats.scans_skipped.count("waiting_for_scan_period")
+                ? stats.scans_skipped.at("waiting_for_scan_period")
+                : 0);
   return node.runner().counts().waiting_period;
 }
 

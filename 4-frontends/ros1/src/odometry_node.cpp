@@ -124,9 +124,9 @@ class OdometryNode {
   }
 
   void on_wheel_odometry(const nav_msgs::Odometry::ConstPtr& msg) {
-    const io::WheelSpeeds w = io::wheel_speeds(io::to_message(*msg),
-                                               settings_.odometry.filter.track_width_m,
-                                               io::to_stamp(ros::Time::now()));
+    const io::WheelSpeeds w =
+        io::wheel_speeds(io::to_message(*msg), settings_.odometry.filter.track_width_m,
+                         io::to_stamp(ros::Time::now()));
     runner_.add_wheels(w.t_s, w.left_mps, w.right_mps);
     arrived();
   }

@@ -40,13 +40,13 @@ struct ClassificationConfig {
   /// racks). 3 m lets a forklift seen from the side through.
   double max_dynamic_extent_m = 3.0;
   /// Beyond the thesis: each slow scan takes one from the dynamic weight (not below 0) until the
-  /// object is dynamic. The thesis only adds; with this on (the default) measurement noise that now and then pushes
-  /// a wall over L_v cannot add up over minutes to make the wall dynamic.
+  /// object is dynamic. The thesis only adds; with this on (the default) measurement noise that now
+  /// and then pushes a wall over L_v cannot add up over minutes to make the wall dynamic.
   bool slow_scans_reduce_dynamic_weight = true;
   /// Beyond the thesis: a dynamic object that has been slow for this many scans in a row is static
-  /// again (0: never, the thesis's "dynamic for good"). It keeps a parked vehicle or a long-waiting person out of
-  /// the scan for a while, and it undoes a dynamic track that has drifted onto a wall. 100 scans
-  /// is 5 s at the thesis's 20 Hz.
+  /// again (0: never, the thesis's "dynamic for good"). It keeps a parked vehicle or a long-waiting
+  /// person out of the scan for a while, and it undoes a dynamic track that has drifted onto a
+  /// wall. 100 scans is 5 s at the thesis's 20 Hz.
   int still_scans_to_static = 100;
   /// A scan where the object's point count changed by more than this factor since the last scan
   /// gives no evidence (a merge, a split, or an occlusion starting).

@@ -54,10 +54,10 @@ class OdometryRunner {
  private:
   struct Measurement {
     double t_s;
-    int source;          // 0 wheels, 1 IMU: wheels first at equal stamps.
-    std::uint64_t seq;   // Arrival order among equal keys.
-    double a;            // Wheels: v_left; IMU: yaw rate.
-    double b;            // Wheels: v_right.
+    int source;         // 0 wheels, 1 IMU: wheels first at equal stamps.
+    std::uint64_t seq;  // Arrival order among equal keys.
+    double a;           // Wheels: v_left; IMU: yaw rate.
+    double b;           // Wheels: v_right.
   };
   struct Later {
     bool operator()(const Measurement& x, const Measurement& y) const;

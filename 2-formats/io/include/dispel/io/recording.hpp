@@ -54,8 +54,8 @@ struct OdometryMessage {
   Header header;
   std::string child_frame_id;
   Pose2 pose;
-  double v_mps = 0.0;     ///< twist.linear.x
-  double w_radps = 0.0;   ///< twist.angular.z
+  double v_mps = 0.0;    ///< twist.linear.x
+  double w_radps = 0.0;  ///< twist.angular.z
 };
 
 /// One transform of tf2_msgs/TFMessage, its planar part.

@@ -42,18 +42,18 @@ struct MotionQuery {
 /// What the first pass learns.
 struct RecordingMotion {
   std::string scan_topic;
-  std::int64_t scans = 0;         ///< Messages on scan_topic.
-  LaserScan first_scan;           ///< Decoded from the first message on scan_topic.
-  std::string laser_frame;        ///< Its frame, without a leading '/'.
+  std::int64_t scans = 0;   ///< Messages on scan_topic.
+  LaserScan first_scan;     ///< Decoded from the first message on scan_topic.
+  std::string laser_frame;  ///< Its frame, without a leading '/'.
   /// The scanner's period by the filter's rule (pipeline::ScanPeriod over the first scans), if
   /// the scans tell it.
   std::optional<double> scan_period_s;
   bool static_sensor = false;
-  std::string fixed_frame;        ///< The frame of the poses ("odom", or the topic's).
-  std::string base_frame;         ///< The robot's frame (the pose topic's child frame).
-  PoseBuffer base_poses;          ///< The robot in the fixed frame; empty for a static sensor.
-  std::int64_t poses_refused = 0; ///< Pose messages out of order or not finite.
-  Pose2 mount;                    ///< The laser in the robot's frame.
+  std::string fixed_frame;         ///< The frame of the poses ("odom", or the topic's).
+  std::string base_frame;          ///< The robot's frame (the pose topic's child frame).
+  PoseBuffer base_poses;           ///< The robot in the fixed frame; empty for a static sensor.
+  std::int64_t poses_refused = 0;  ///< Pose messages out of order or not finite.
+  Pose2 mount;                     ///< The laser in the robot's frame.
 
   /// The laser's pose in the fixed frame at @p stamp_s: the identity for a static sensor, else
   /// the robot's interpolated pose times the mount; std::nullopt with the reason in @p why when

@@ -32,11 +32,11 @@ struct FilterJobOptions {
 
 /// What the job did.
 struct FilterJobStats {
-  std::string input_format;                           ///< "rosbag" or "carmen".
-  std::int64_t messages_in = 0;                       ///< Messages (bag) or lines (CARMEN) read.
-  std::int64_t messages_out = 0;                      ///< Messages written.
-  std::int64_t scans = 0;                             ///< Scans seen.
-  std::int64_t scans_filtered = 0;                    ///< Scans the filter tracked and filtered.
+  std::string input_format;         ///< "rosbag" or "carmen".
+  std::int64_t messages_in = 0;     ///< Messages (bag) or lines (CARMEN) read.
+  std::int64_t messages_out = 0;    ///< Messages written.
+  std::int64_t scans = 0;           ///< Scans seen.
+  std::int64_t scans_filtered = 0;  ///< Scans the filter tracked and filtered.
   /// Passed through unchanged, by reason: bad_scan_<issue>, bad_pose, odometry_<lookup> (no pose
   /// at the scan's stamp), waiting_for_scan_period (--scale-to-scanner, the first scans of a
   /// scanner that states no period).

@@ -16,7 +16,8 @@ namespace dispel::render {
 
 /// A PNG or SVG picture (chosen by @p path's extension) of a given size, white, drawn with Cairo
 /// and written to "<path>.partial"; commit() finishes it and moves it into place. Without
-/// commit() nothing is left behind. @throws jobs::JobError for another extension or an unwritable path.
+/// commit() nothing is left behind. @throws jobs::JobError for another extension or an unwritable
+/// path.
 class Canvas {
  public:
   Canvas(const std::string& path, int width_px, int height_px);

@@ -1,7 +1,8 @@
 #pragma once
 /// @file
 /// ROS 1 messages the nodes publish, built from dispel's results: free functions, nothing else
-/// (the scan, odometry and IMU conversions shared with the bag tools are in io/ros_convert.hpp).
+/// (the scan, odometry and IMU conversions shared with the bag tools are in
+/// dispel/io/ros1_messages.hpp).
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
 #include <geometry_msgs/TransformStamped.h>

@@ -1,3 +1,4 @@
 // A core file that prints and reads a bag: the layer check must refuse it.
-#include <iostream>
 #include <rosbag/bag.h>
+
+#include <iostream>

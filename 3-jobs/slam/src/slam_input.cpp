@@ -1,6 +1,6 @@
 // Internal to dispel::slam: the shared first pass over a recording, and its scans.
 
-#include "bag_input.hpp"
+#include "slam_input.hpp"
 
 #include "dispel/jobs/job.hpp"
 

@@ -62,6 +62,29 @@ std::string join_names(const std::vector<std::string>& names) {
   return s.empty() ? std::string("none") : s;
 }
 
+ScanMessage scan_message(const LaserScan& scan, const std::string& frame_id) {
+  ScanMessage m;
+  m.header.stamp = Stamp::from_seconds(scan.stamp_s);
+  m.header.frame_id = frame_id;
+  m.scan = scan;
+  const double last = static_cast<double>(scan.size() > 0 ? scan.size() - 1 : 0);
+  m.angle_max = static_cast<float>(scan.angle_min_rad + scan.angle_increment_rad * last);
+  return m;
+}
+
+OdometryMessage odometry_message(double stamp_s, const std::string& frame_id,
+                                 const std::string& child_frame_id, const Pose2& pose, double v_mps,
+                                 double w_radps) {
+  OdometryMessage m;
+  m.header.stamp = Stamp::from_seconds(stamp_s);
+  m.header.frame_id = frame_id;
+  m.child_frame_id = child_frame_id;
+  m.pose = pose;
+  m.v_mps = v_mps;
+  m.w_radps = w_radps;
+  return m;
+}
+
 ScanMessage filtered_message(const ScanMessage& original, const FilterResult& result) {
   ScanMessage msg = original;
   if (result.filtered.ranges_m.size() == msg.scan.ranges_m.size()) {

@@ -77,27 +77,13 @@ LaserScan from_ros(const sensor_msgs::LaserScan& msg) {
 }
 
 sensor_msgs::LaserScan to_ros(const LaserScan& scan, const std::string& frame_id) {
-  ScanMessage m;
-  m.header.stamp = Stamp::from_seconds(scan.stamp_s);
-  m.header.frame_id = frame_id;
-  m.scan = scan;
-  m.angle_max = static_cast<float>(scan.angle_min_rad +
-                                   scan.angle_increment_rad *
-                                       static_cast<double>(scan.size() > 0 ? scan.size() - 1 : 0));
-  return to_ros(m);
+  return to_ros(scan_message(scan, frame_id));
 }
 
 nav_msgs::Odometry to_ros_odometry(double stamp_s, const std::string& frame_id,
                                    const std::string& child_frame_id, const Pose2& pose,
                                    double v_mps, double w_radps) {
-  OdometryMessage m;
-  m.header.stamp = Stamp::from_seconds(stamp_s);
-  m.header.frame_id = frame_id;
-  m.child_frame_id = child_frame_id;
-  m.pose = pose;
-  m.v_mps = v_mps;
-  m.w_radps = w_radps;
-  return to_ros(m);
+  return to_ros(odometry_message(stamp_s, frame_id, child_frame_id, pose, v_mps, w_radps));
 }
 
 ScanMessage to_message(const sensor_msgs::LaserScan& msg) {

@@ -39,9 +39,9 @@ class ScanFilter {
   ScanFilter(const FilterJobOptions& o, FilterJobStats& stats)
       : runner_({base_config(o), o.scale_to_scanner, 0.0}), stats_(stats) {}
 
-  // @p no_pose_reason: why @p pose is std::nullopt.
+  // @p why: why @p pose is std::nullopt (counted as odometry_<why>).
   const FilterResult& process(const LaserScan& scan, double stated_period_s,
-                              const std::optional<Pose2>& pose, const char* no_pose_reason) {
+                              const std::optional<Pose2>& pose, PoseLookup why) {
     const FilterResult& result = runner_.process(scan, stated_period_s, pose);
     ++stats_.scans;
     stats_.scan_time_s.push_back(runner_.last_time_s());
@@ -57,7 +57,7 @@ class ScanFilter {
         ++stats_.scans_skipped["bad_pose"];
         break;
       case pipeline::ScanOutcome::kNoPose:
-        ++stats_.scans_skipped[no_pose_reason];
+        ++stats_.scans_skipped[std::string("odometry_") + pose_lookup_name(why)];
         break;
       case pipeline::ScanOutcome::kWaitingForPeriod:
         ++stats_.scans_skipped["waiting_for_scan_period"];
@@ -130,9 +130,7 @@ FilterJobStats run_recording(const FilterJobOptions& o, const Progress& progress
       if (!scan) return;
       PoseLookup why = PoseLookup::kOk;
       const std::optional<Pose2> pose = motion.sensor_pose(scan->scan.stamp_s, &why);
-      const std::string reason = std::string("odometry_") + pose_lookup_name(why);
-      const FilterResult& result =
-          filter.process(scan->scan, scan->scan_time, pose, reason.c_str());
+      const FilterResult& result = filter.process(scan->scan, scan->scan_time, pose, why);
       write_outputs(*out, o.scan_topic, m.time(), *scan, result);
     });
     out->finish();
@@ -168,11 +166,8 @@ FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
       for (; next_odom < log.odometry.size() && log.odometry[next_odom].stamp_s <= t; ++next_odom) {
         const TimedPose& p = log.odometry[next_odom];
         if (!std::isfinite(p.stamp_s) || p.stamp_s < 0.0) continue;
-        io::OdometryMessage msg;
-        msg.header.stamp = io::Stamp::from_seconds(p.stamp_s);
-        msg.header.frame_id = "odom";
-        msg.child_frame_id = "base_link";
-        msg.pose = p.pose;
+        const io::OdometryMessage msg =
+            io::odometry_message(p.stamp_s, "odom", "base_link", p.pose);
         out->write("/odom", msg.header.stamp, msg);
       }
     };
@@ -184,16 +179,10 @@ FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
         ++stats.scans_skipped["bad_stamp"];
         continue;
       }
-      io::ScanMessage msg;
-      msg.header.stamp = io::Stamp::from_seconds(cs.scan.stamp_s);
-      msg.header.frame_id = cs.kind == "RLASER" ? "rear_laser" : "laser";
-      msg.scan = cs.scan;
-      msg.angle_max =
-          static_cast<float>(cs.scan.angle_min_rad +
-                             cs.scan.angle_increment_rad *
-                                 static_cast<double>(cs.scan.size() > 0 ? cs.scan.size() - 1 : 0));
+      const io::ScanMessage msg =
+          io::scan_message(cs.scan, cs.kind == "RLASER" ? "rear_laser" : "laser");
       const FilterResult& result =
-          filter.process(cs.scan, 0.0, o.static_sensor ? Pose2{} : cs.laser_pose, "no_pose");
+          filter.process(cs.scan, 0.0, o.static_sensor ? Pose2{} : cs.laser_pose, PoseLookup::kOk);
       out->write(o.scan_topic, msg.header.stamp, msg);
       write_outputs(*out, o.scan_topic, msg.header.stamp, msg, result);
       if (progress && i % 64 == 0) {

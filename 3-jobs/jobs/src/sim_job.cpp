@@ -3,22 +3,6 @@
 #include <limits>
 
 namespace dispel::jobs {
-namespace {
-
-io::OdometryMessage odometry(double stamp_s, const char* frame, const Pose2& pose, double v_mps,
-                             double w_radps) {
-  io::OdometryMessage m;
-  m.header.stamp = io::Stamp::from_seconds(stamp_s);
-  m.header.frame_id = frame;
-  m.child_frame_id = "base_link";
-  m.pose = pose;
-  m.v_mps = v_mps;
-  m.w_radps = w_radps;
-  return m;
-}
-
-}  // namespace
-
 void write_simulation(const sim::SimulationOutput& run, const sim::Scenario& scenario,
                       const std::string& path) {
   const std::unique_ptr<io::RecordingWriter> out = create_recording(path, Compression::kLz4);
@@ -32,14 +16,7 @@ void write_simulation(const sim::SimulationOutput& run, const sim::Scenario& sce
     const auto write_scans_until = [&](double t) {
       for (; next_scan < run.scans.size() && run.scans[next_scan].scan.stamp_s <= t; ++next_scan) {
         const sim::ScanFrame& f = run.scans[next_scan];
-        io::ScanMessage msg;
-        msg.header.stamp = io::Stamp::from_seconds(f.scan.stamp_s);
-        msg.header.frame_id = "laser";
-        msg.scan = f.scan;
-        msg.angle_max =
-            static_cast<float>(f.scan.angle_min_rad +
-                               f.scan.angle_increment_rad *
-                                   static_cast<double>(f.scan.size() > 0 ? f.scan.size() - 1 : 0));
+        io::ScanMessage msg = io::scan_message(f.scan, "laser");
         msg.scan_time = static_cast<float>(1.0 / scenario.lidar.rate_hz);
         out->write("/scan", msg.header.stamp, msg);
         msg.scan.intensities.resize(f.truth.size());
@@ -57,9 +34,11 @@ void write_simulation(const sim::SimulationOutput& run, const sim::Scenario& sce
       write_scans_until(s.stamp_s);
       const io::Stamp t = io::Stamp::from_seconds(s.stamp_s);
       out->write("/odom", t,
-                 odometry(s.stamp_s, "odom", s.odom_pose, s.odom_v_mps, s.odom_w_radps));
+                 io::odometry_message(s.stamp_s, "odom", "base_link", s.odom_pose, s.odom_v_mps,
+                                      s.odom_w_radps));
       out->write("/ground_truth", t,
-                 odometry(s.stamp_s, "map", s.true_pose, s.true_v_mps, s.true_w_radps));
+                 io::odometry_message(s.stamp_s, "map", "base_link", s.true_pose, s.true_v_mps,
+                                      s.true_w_radps));
       io::JointStateMessage wheels;
       wheels.header.stamp = t;
       wheels.names = {"left_wheel", "right_wheel"};

@@ -198,6 +198,15 @@ class RecordingWriter {
   std::int64_t written_ = 0;
 };
 
+/// A scan message for a scan of the core (the simulator's, a CARMEN log's): the header stamped
+/// with scan.stamp_s in @p frame_id, angle_max from the beam count, no stated period.
+ScanMessage scan_message(const LaserScan& scan, const std::string& frame_id);
+/// An odometry message: @p pose of @p child_frame_id in @p frame_id at @p stamp_s, moving forward
+/// at @p v_mps and turning at @p w_radps.
+OdometryMessage odometry_message(double stamp_s, const std::string& frame_id,
+                                 const std::string& child_frame_id, const Pose2& pose,
+                                 double v_mps = 0.0, double w_radps = 0.0);
+
 /// The message written on <scan topic>_filtered: @p original with the filtered ranges (removed
 /// beams NaN).
 ScanMessage filtered_message(const ScanMessage& original, const FilterResult& result);

@@ -34,11 +34,6 @@ void check_cancelled(const std::atomic<bool>* cancel);
 /// @throws JobError "<path>: <reason>" unless @p path is a regular file that exists.
 void check_input_file(const std::string& path);
 
-/// Runs @p fn; the errors of dispel::io (InputError, ConfigError, OutputError) and a bad value
-/// the core refuses (std::invalid_argument) come out as JobError with the same message.
-template <typename Fn>
-auto as_job(Fn&& fn) -> decltype(fn());
-
 /// Opens a recording by its file: a ROS 1 bag. @throws JobError "<path>: not a readable ROS 1 bag
 /// (...)" (a missing file too: callers that want "No such file" say so first, check_input_file)
 std::unique_ptr<io::RecordingReader> open_recording(const std::string& path);
@@ -51,12 +46,11 @@ enum class Compression { kNone, kBz2, kLz4 };
 std::unique_ptr<io::RecordingWriter> create_recording(const std::string& path,
                                                       Compression compression = Compression::kNone);
 
-// ------------------------------------------------------------------------------------------
-
-/// @cond internal
+/// The current exception (an io error or std::invalid_argument) as JobError.
 [[noreturn]] void rethrow_as_job_error();
-/// @endcond
 
+/// Runs @p fn; the errors of dispel::io (InputError, ConfigError, OutputError) and a bad value
+/// the core refuses (std::invalid_argument) come out as JobError with the same message.
 template <typename Fn>
 auto as_job(Fn&& fn) -> decltype(fn()) {
   try {

@@ -3,23 +3,21 @@
 README's "Results on the simulated thesis hall" and docs/simulator.md.
 
 usage: filter_sim_eval.py DISPEL SCENARIO.yaml CONFIG.yaml [--seeds N] [--set section.key=value ...]
+                          [--scenario-set section.key=value ...]
 
 For each seed 1..N (default 5): dispel sim -> dispel filter --config -> dispel eval --json. --set
 changes one key of the configuration, e.g. --set classification.presumption=guilt
---set tracking.matching=nearest_neighbour. Prints mean preservation and rejection and the median
+--set tracking.matching=nearest_neighbour; --scenario-set changes one of the scenario, e.g.
+--scenario-set robot.speed_mps=1.5. Prints mean preservation and rejection and the median
 over seeds of each run's median detection latency."""
 import json, os, re, statistics, subprocess, sys, tempfile
 
-def main():
-    args = sys.argv[1:]
-    dispel, scenario, config = args[0], args[1], args[2]
-    seeds = int(args[args.index('--seeds') + 1]) if '--seeds' in args else 5
-    settings = [args[i + 1] for i, a in enumerate(args) if a == '--set']
-    text = open(config).read()
+def set_keys(text, settings):
+    """YAML text with each section.key=value of settings set: a key the file already sets in that
+    section is replaced (YAML keys must be unique), else added to the section."""
     for s in settings:
         key, value = s.split('=', 1)
         section, name = key.split('.', 1)
-        # A key the file already sets in that section is replaced (YAML keys must be unique).
         block = re.search(r'^%s:\s*(#.*)?\n((?:[ \t]+.*\n|[ \t]*\n)*)' % section, text, re.M)
         if block and re.search(r'^[ \t]+%s:' % re.escape(name), block.group(2), re.M):
             body = re.sub(r'^([ \t]+)%s:.*$' % re.escape(name), r'\g<1>%s: %s' % (name, value),
@@ -30,10 +28,22 @@ def main():
                           count=1, flags=re.M)
         else:
             text += '\n%s:\n  %s: %s\n' % (section, name, value)
+    return text
+
+def main():
+    args = sys.argv[1:]
+    dispel, scenario, config = args[0], args[1], args[2]
+    seeds = int(args[args.index('--seeds') + 1]) if '--seeds' in args else 5
+    settings = [args[i + 1] for i, a in enumerate(args) if a == '--set']
+    scenario_settings = [args[i + 1] for i, a in enumerate(args) if a == '--scenario-set']
+    text = set_keys(open(config).read(), settings)
+    scenario_text = set_keys(open(scenario).read(), scenario_settings)
     runs = []
     with tempfile.TemporaryDirectory() as tmp:
         cfg = os.path.join(tmp, 'config.yaml')
         open(cfg, 'w').write(text)
+        scenario = os.path.join(tmp, os.path.basename(scenario))
+        open(scenario, 'w').write(scenario_text)
         for seed in range(1, seeds + 1):
             sim, out = os.path.join(tmp, 'sim.bag'), os.path.join(tmp, 'filtered.bag')
             subprocess.run([dispel, 'sim', scenario, '-o', sim, '--seed', str(seed)], check=True,
@@ -57,7 +67,8 @@ def main():
                  if r['detection_latency_s']['median'] is not None]
     print('%s, %s%s, seeds 1-%d: preservation %.4f, rejection %.4f, latency %s' % (
         os.path.basename(scenario), os.path.basename(config),
-        ''.join(' --set ' + s for s in settings), seeds, mean('preservation_rate'),
+        ''.join(' --set ' + s for s in settings) +
+        ''.join(' --scenario-set ' + s for s in scenario_settings), seeds, mean('preservation_rate'),
         mean('rejection_rate'), '%.2f s' % statistics.median(latencies) if latencies else '-'))
     for seed, r in enumerate(runs, 1):
         lat = r['detection_latency_s']['median']

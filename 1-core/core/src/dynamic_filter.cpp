@@ -28,6 +28,17 @@ bool edge_at_view_limit(EdgeNeighbour n) {
 // a new side (or merged with someone next to it), not something that just appeared in free space.
 constexpr std::int32_t kFreeSpaceMaxAge = 10;
 
+// An object whose beams the registered map explains by at least this share is a surface that has
+// stood there: whatever its outline does, it is not moving.
+constexpr double kExplainedShare = 0.5;
+
+// An object that has stood still in the sensor frame (within kAttachedTolerance_m) for
+// kAttachedTime_s, within kAttachedRange_m of the sensor, is part of the robot or carried by it (a
+// bumper, a mast, another scanner): it moves with the sensor and is not a moving object.
+constexpr double kAttachedTolerance_m = 0.03;
+constexpr double kAttachedTime_s = 1.0;
+constexpr double kAttachedRange_m = 1.5;
+
 // Fragments are absorbed by dynamic tracks seen in this scan or missed for a few scans at most.
 constexpr std::int32_t kFragmentMaxMissed = 2;
 
@@ -66,12 +77,14 @@ const char* filter_event_name(FilterEvent event) {
 DynamicFilter::DynamicFilter(DynamicFilterConfig config)
     : config_((config.validate(), std::move(config))),
       segmenter_(config_.segmentation),
-      free_space_(config_.free_space) {}
+      free_space_(config_.free_space),
+      registration_(config_.registration) {}
 
 void DynamicFilter::reset() {
   counters_.tracks_dropped += static_cast<std::int64_t>(tracks_.size());
   tracks_.clear();
   free_space_.clear();
+  registration_.reset();
   have_previous_ = false;
 }
 
@@ -83,15 +96,26 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
     pass_through(scan, checked.event, out);
     return;
   }
-  const Pose2& pose = *sensor_pose;
+  const bool registering = config_.registration.enabled;
+  out.registration = RegistrationReport{};
+  const Pose2 pose =
+      registering ? registration_.register_scan(scan, sensor_pose, out.registration) : *sensor_pose;
+  if (registering) {
+    counters_.scans_registered += out.registration.registered ? 1 : 0;
+    counters_.registration_fallbacks += out.registration.fallback ? 1 : 0;
+    counters_.registration_degenerate += out.registration.degenerate ? 1 : 0;
+    counters_.scans_without_odometry += sensor_pose ? 0 : 1;
+  }
+  out.sensor_pose = pose;
+  previous_input_pose_ = sensor_pose;
   segmenter_.segment(scan, out.segmentation);
   observe(out.segmentation, pose, scan.range_max_m);
+  if (registering) explain(scan, out.segmentation);
   match(scan.stamp_s);
   if (checked.learn) {
     update_velocities(scan.stamp_s);
     classify(scan, pose, out.segmentation);
     previous_stamp_s_ = scan.stamp_s;
-    previous_pose_ = pose;
     have_previous_ = true;
   } else {
     // A repeated stamp: no time has passed, so nothing can be learned; label from the tracks.
@@ -106,6 +130,19 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
     }
   }
   label(scan, pose, checked, out);
+  if (registering && checked.learn) {
+    // The map learns what stays in the scan: static objects and beams of no object.
+    keep_.resize(out.labels.size());
+    in_free_.assign(config_.free_space.enabled ? out.labels.size() : 0, 0);
+    const std::vector<Eigen::Vector2d>& points = registration_.points();
+    for (std::size_t b = 0; b < out.labels.size(); ++b) {
+      keep_[b] = out.labels[b] == BeamLabel::kStatic || out.labels[b] == BeamLabel::kNoObject;
+      if (keep_[b] && !in_free_.empty()) {
+        in_free_[b] = free_space_.known_free(points[b]);
+      }
+    }
+    registration_.add(keep_, in_free_);
+  }
   ++counters_.events[static_cast<std::size_t>(checked.event)];
 }
 
@@ -118,9 +155,9 @@ DynamicFilter::ScanCheck DynamicFilter::check(const LaserScan& scan,
   if (issue != ScanIssue::kNone) {
     ++counters_.rejected_by_issue[static_cast<std::size_t>(issue)];
     c.event = FilterEvent::kRejectedScan;
-  } else if (!sensor_pose) {
+  } else if (!sensor_pose && !config_.registration.enabled) {
     c.event = FilterEvent::kNoPose;
-  } else if (!finite_pose(*sensor_pose)) {
+  } else if (sensor_pose && !finite_pose(*sensor_pose)) {
     c.event = FilterEvent::kRejectedPose;
   }
   if (c.event != FilterEvent::kFiltered) {
@@ -132,8 +169,12 @@ DynamicFilter::ScanCheck DynamicFilter::check(const LaserScan& scan,
     return c;
   }
   const double dt = scan.stamp_s - previous_stamp_s_;
-  const double moved = (sensor_pose->translation() - previous_pose_.translation()).norm();
-  const double turned = std::abs(wrap_angle(sensor_pose->yaw_rad - previous_pose_.yaw_rad));
+  // A jump of the given poses (the odometry's frame), when there are two to compare.
+  double moved = 0.0, turned = 0.0;
+  if (sensor_pose && previous_input_pose_) {
+    moved = (sensor_pose->translation() - previous_input_pose_->translation()).norm();
+    turned = std::abs(wrap_angle(sensor_pose->yaw_rad - previous_input_pose_->yaw_rad));
+  }
   if (dt < 0.0) {
     reset();
     c.event = FilterEvent::kResetTimeBackwards;
@@ -167,6 +208,8 @@ void DynamicFilter::pass_through_unfiltered(const LaserScan& scan, FilterEvent e
 
 void DynamicFilter::pass_through(const LaserScan& scan, FilterEvent event, FilterResult& out) {
   pass_through_unfiltered(scan, event, out);
+  out.sensor_pose.reset();
+  out.registration = RegistrationReport{};
   for (Track& t : tracks_) t.object_index = -1;
   write_tracks(out);
   ++counters_.events[static_cast<std::size_t>(event)];
@@ -185,12 +228,26 @@ void DynamicFilter::observe(const Segmentation& segmentation, const Pose2& senso
   const auto at_range_limit = [&](EdgeNeighbour n, const Eigen::Vector2d& p) {
     return n == EdgeNeighbour::kInvalid && p.norm() > range_edge;
   };
+  // With the registration, the edges are its de-skewed points (each beam where the sensor was
+  // when it measured it), and the centroid moves with them.
+  const std::vector<Eigen::Vector2d>* deskewed =
+      config_.registration.enabled ? &registration_.points() : nullptr;
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const ScanObject& o = objects[i];
     Observation& obs = observations_[i];
     obs.points[kFirst] = sensor_pose.apply(o.first_point_m);
     obs.points[kLast] = sensor_pose.apply(o.last_point_m);
     obs.points[kCentroid] = sensor_pose.apply(o.centroid_m);
+    if (deskewed != nullptr) {
+      const Eigen::Vector2d first = (*deskewed)[static_cast<std::size_t>(o.first_beam)];
+      const Eigen::Vector2d last = (*deskewed)[static_cast<std::size_t>(o.last_beam)];
+      obs.points[kCentroid] +=
+          0.5 * ((first - obs.points[kFirst]) + (last - obs.points[kLast]));
+      obs.points[kFirst] = first;
+      obs.points[kLast] = last;
+    }
+    obs.explained_share = 0.0;
+    obs.local_centroid = o.centroid_m;
     obs.trusted[kFirst] =
         edge_trusted(o.before_first) && !at_range_limit(o.before_first, o.first_point_m);
     obs.trusted[kLast] =
@@ -200,6 +257,25 @@ void DynamicFilter::observe(const Segmentation& segmentation, const Pose2& senso
     obs.ambiguous = edge_at_view_limit(o.before_first) || edge_at_view_limit(o.after_last);
     obs.extent_m = (o.last_point_m - o.first_point_m).norm();
     obs.point_count = o.point_count;
+  }
+}
+
+// Which beams the registered map explains, and each object's share of them.
+void DynamicFilter::explain(const LaserScan& scan, const Segmentation& segmentation) {
+  explained_.assign(scan.size(), 0);
+  std::vector<std::int32_t>& count = explained_count_;
+  count.assign(segmentation.objects.size(), 0);
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    const std::int32_t o = segmentation.beam_labels[b];
+    if (o < 0 && o != kLabelNoise) continue;
+    if (!registration_.explained(b)) continue;
+    explained_[b] = 1;
+    if (o >= 0) ++count[static_cast<std::size_t>(o)];
+  }
+  for (std::size_t i = 0; i < segmentation.objects.size(); ++i) {
+    observations_[i].explained_share =
+        static_cast<double>(count[i]) /
+        static_cast<double>(std::max(1, segmentation.objects[i].point_count));
   }
 }
 
@@ -275,7 +351,9 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
       static_cast<double>(std::max(obs.point_count, track.point_count)) /
       static_cast<double>(std::max(1, std::min(obs.point_count, track.point_count)));
   MotionEvidence evidence = MotionEvidence::kFast;
-  if (track.speed_mps <= cc.speed_limit_mps) {
+  if (obs.explained_share >= kExplainedShare) {
+    evidence = MotionEvidence::kSlow;  // A surface that has stood there: its outline slides.
+  } else if (track.speed_mps <= cc.speed_limit_mps) {
     evidence = MotionEvidence::kSlow;
   } else if (ratio > cc.max_point_count_ratio) {
     evidence = MotionEvidence::kNone;  // Size jump (merge, split, occlusion): motion unreliable.
@@ -293,7 +371,20 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
       }
     }
   }
+  // Part of the robot: still in the sensor frame for long, near it.
+  if ((obs.local_centroid - track.local_anchor).norm() > kAttachedTolerance_m) {
+    track.local_anchor = obs.local_centroid;
+    track.local_still_since_s = stamp_s;
+  }
+  const bool attached = config_.registration.enabled &&
+                        stamp_s - track.local_still_since_s >= kAttachedTime_s &&
+                        obs.local_centroid.norm() <= kAttachedRange_m;
+  if (attached) evidence = MotionEvidence::kSlow;
   track.cls = update_class_state(track.cls, evidence, cc);
+  if (attached && track.cls.object_class != ObjectClass::kStatic) {
+    track.cls.object_class = ObjectClass::kStatic;
+    track.cls.dynamic_weight = 0;
+  }
   track.point_count = obs.point_count;
   // A dynamic object keeps the extent it had when it became dynamic: people and vehicles do not
   // grow, so its track cannot creep onto a wall the person stood next to.
@@ -337,6 +428,8 @@ DynamicFilter::Track DynamicFilter::new_track(const Observation& obs, double sta
   t.extent_m = obs.extent_m;
   t.speed_mps = 0.0;
   t.object_index = object_index;
+  t.local_anchor = obs.local_centroid;
+  t.local_still_since_s = stamp_s;
   ++counters_.tracks_created;
   return t;
 }
@@ -360,6 +453,7 @@ void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan, const Pose
     if ((o.last_point_m - o.first_point_m).norm() > config_.classification.max_dynamic_extent_m) {
       continue;
     }
+    if (observations_[i].explained_share >= kExplainedShare) continue;
     Track& t = tracks_[static_cast<std::size_t>(track_of_object_[i])];
     if (t.age_scans > kFreeSpaceMaxAge) continue;
     if (t.cls.object_class != ObjectClass::kDynamic) {
@@ -441,8 +535,10 @@ BeamLabel DynamicFilter::beam_label(const LaserScan& scan, std::size_t b,
                                     bool learned) {
   const FreeSpaceConfig& fs = config_.free_space;
   const bool check_occupied = learned && fs.enabled && fs.keep_long_occupied;
+  const bool explained = !explained_.empty() && explained_[b] != 0;
   if (segment_label == kLabelNoise) {
-    if (!learned || !(config_.tracking.fragment_distance_m > 0.0)) return BeamLabel::kNoObject;
+    if (!learned || !(config_.tracking.fragment_distance_m > 0.0) || explained)
+      return BeamLabel::kNoObject;
     const Eigen::Vector2d point = beam_point(scan, b, sensor_pose);
     if (near_dynamic_track(point, scan.stamp_s) &&
         !(check_occupied && free_space_.hit_balance(point) >= fs.max_recent_hits)) {
@@ -453,6 +549,10 @@ BeamLabel DynamicFilter::beam_label(const LaserScan& scan, std::size_t b,
   }
   const ObjectVerdict& v = verdicts_[static_cast<std::size_t>(segment_label)];
   if (v.object_class == ObjectClass::kStatic) return BeamLabel::kStatic;
+  if (explained) {
+    ++counters_.beams_kept_explained;
+    return BeamLabel::kStatic;
+  }
   if (check_occupied) {
     const Eigen::Vector2d point = beam_point(scan, b, sensor_pose);
     const bool slow = v.speed_mps <= 2.0 * config_.classification.speed_limit_mps;

@@ -40,6 +40,7 @@ void DynamicFilterConfig::validate() const {
   velocity.validate();
   classification.validate();
   free_space.validate();
+  registration.validate();
   if (!(max_time_gap_s > 0.0)) reject_field("max_time_gap_s", max_time_gap_s, "> 0");
   if (!(max_pose_jump_m > 0.0)) reject_field("max_pose_jump_m", max_pose_jump_m, "> 0");
   if (!(max_pose_jump_rad > 0.0)) reject_field("max_pose_jump_rad", max_pose_jump_rad, "> 0");
@@ -66,6 +67,7 @@ DynamicFilterConfig thesis_config() {
   c.classification.slow_scans_reduce_dynamic_weight = false;
   c.classification.still_scans_to_static = 0;
   c.free_space.enabled = false;
+  c.registration.enabled = false;
   return c;
 }
 

@@ -131,6 +131,101 @@ class OdometrySensors {
   Pose2 odom_;
 };
 
+// Walls as a real building has them (RoughWalls): pieces set back or forward, joined by steps;
+// glass pieces left out; doors as gaps with a recess; pairs of furniture legs in front.
+void add_rough_wall(const Segment& wall, const RoughWalls& rw, std::mt19937_64& rng, World& out) {
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  const Eigen::Vector2d ab = wall.b - wall.a;
+  const double length = ab.norm();
+  if (!(length > 1e-9)) return;
+  const Eigen::Vector2d d = ab / length;
+  const Eigen::Vector2d n(-d.y(), d.x());
+  const auto at = [&](double s, double offset) -> Eigen::Vector2d {
+    return wall.a + s * d + offset * n;
+  };
+  double s = 0.0, previous_offset = 0.0;
+  bool previous_solid = false;
+  while (s < length - 1e-9) {
+    const double piece =
+        std::min(length - s, rw.piece_min_m + u01(rng) * (rw.piece_max_m - rw.piece_min_m));
+    if (u01(rng) < rw.doors_per_10m * piece / 10.0 && piece >= 1.0) {
+      // A door: a gap of 0.9 m with a recess 0.25 m deep on one side.
+      const double side = u01(rng) < 0.5 ? -1.0 : 1.0;
+      const double b0 = s + 0.5 * (piece - 0.9), b1 = b0 + 0.9;
+      if (previous_solid && std::abs(previous_offset) > 1e-9)
+        out.segments.push_back({at(s, previous_offset), at(s, 0.0)});
+      out.segments.push_back({at(s, 0.0), at(b0, 0.0)});
+      out.segments.push_back({at(b0, 0.0), at(b0, 0.25 * side)});
+      out.segments.push_back({at(b0, 0.25 * side), at(b1, 0.25 * side)});
+      out.segments.push_back({at(b1, 0.25 * side), at(b1, 0.0)});
+      out.segments.push_back({at(b1, 0.0), at(s + piece, 0.0)});
+      previous_offset = 0.0;
+      previous_solid = true;
+    } else if (u01(rng) < rw.glass_share) {
+      previous_solid = false;  // Glass: the scanner sees through it and gets nothing back.
+    } else {
+      const double offset = (2.0 * u01(rng) - 1.0) * rw.amplitude_m;
+      if (previous_solid && std::abs(offset - previous_offset) > 1e-9)
+        out.segments.push_back({at(s, previous_offset), at(s, offset)});
+      out.segments.push_back({at(s, offset), at(s + piece, offset)});
+      previous_offset = offset;
+      previous_solid = true;
+    }
+    if (u01(rng) < rw.legs_per_10m * piece / 10.0) {
+      const double side = u01(rng) < 0.5 ? -1.0 : 1.0;
+      const double along = s + u01(rng) * piece;
+      const double off = side * (0.15 + u01(rng) * 0.45);
+      out.circles.push_back({at(along, off), 0.025});
+      out.circles.push_back({at(std::min(length, along + 0.5), off), 0.025});
+    }
+    s += piece;
+  }
+}
+
+// A rack (ShelfRow): uprights at every bay, a box in each bay with probability fill.
+void add_shelf_row(const ShelfRow& row, std::mt19937_64& rng, World& out) {
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  const Eigen::Vector2d ab = row.to - row.from;
+  const double length = ab.norm();
+  if (!(length > 1e-9)) return;
+  const Eigen::Vector2d d = ab / length;
+  const Eigen::Vector2d n(-d.y(), d.x());
+  const double yaw = std::atan2(d.y(), d.x());
+  const int bays = std::max(1, static_cast<int>(std::lround(length / row.bay_m)));
+  const double bay = length / bays;
+  for (int k = 0; k <= bays; ++k) {
+    for (const double side : {0.0, row.depth_m}) {
+      const Rectangle upright{row.from + k * bay * d + side * n, 0.1, 0.1, yaw};
+      for (const Segment& e : rectangle_edges(upright)) out.segments.push_back(e);
+    }
+    if (k == bays || u01(rng) >= row.fill) continue;
+    const double inset = 0.05 + u01(rng) * 0.3;
+    const double box_length = bay * (0.5 + 0.4 * u01(rng));
+    const double box_depth = std::max(0.1, row.depth_m - 2.0 * inset);
+    const Rectangle box{row.from + (k + 0.5) * bay * d + 0.5 * row.depth_m * n, box_length,
+                        box_depth, yaw};
+    for (const Segment& e : rectangle_edges(box)) out.segments.push_back(e);
+  }
+}
+
+// The outward normal of the shape a beam hit, for the incidence of the beam.
+double incidence_cosine(const World& world, std::int32_t id, const Eigen::Vector2d& origin,
+                        const Eigen::Vector2d& direction, double range) {
+  const auto segments = static_cast<std::int32_t>(world.segments.size());
+  Eigen::Vector2d normal;
+  if (id < segments) {
+    const Segment& s = world.segments[static_cast<std::size_t>(id)];
+    const Eigen::Vector2d t = s.b - s.a;
+    normal = Eigen::Vector2d(-t.y(), t.x());
+  } else {
+    const Circle& c = world.circles[static_cast<std::size_t>(id - segments)];
+    normal = origin + range * direction - c.center;
+  }
+  const double norm = normal.norm();
+  if (!(norm > 0.0)) return 1.0;
+  return std::max(0.1, std::abs(normal.dot(direction)) / norm);
+}
+
 }  // namespace
 
 void Scenario::validate() const {
@@ -149,6 +244,35 @@ void Scenario::validate() const {
     reject("lidar.rate_hz", lidar.rate_hz, "in (0, 100]");
   if (!(lidar.range_limit_m >= 0.0)) reject("lidar.range_limit_m", lidar.range_limit_m, ">= 0");
   if (!(lidar.range_noise_m >= 0.0)) reject("lidar.range_noise_m", lidar.range_noise_m, ">= 0");
+  if (!(lidar.range_noise_per_m >= 0.0 && lidar.range_noise_per_m <= 1.0))
+    reject("lidar.range_noise_per_m", lidar.range_noise_per_m, "in [0, 1]");
+  if (!(lidar.incidence_noise >= 0.0 && lidar.incidence_noise <= 10.0))
+    reject("lidar.incidence_noise", lidar.incidence_noise, "in [0, 10]");
+  if (!(lidar.mixed_pixels >= 0.0 && lidar.mixed_pixels <= 1.0))
+    reject("lidar.mixed_pixels", lidar.mixed_pixels, "in [0, 1]");
+  if (world.rough_walls) {
+    const RoughWalls& w = *world.rough_walls;
+    if (!(w.amplitude_m >= 0.0 && w.amplitude_m <= 1.0))
+      reject("world.rough_walls.amplitude_m", w.amplitude_m, "in [0, 1]");
+    if (!(w.piece_min_m >= 0.05)) reject("world.rough_walls.piece_min_m", w.piece_min_m, ">= 0.05");
+    if (!(w.piece_max_m >= w.piece_min_m && w.piece_max_m <= 100.0))
+      reject("world.rough_walls.piece_max_m", w.piece_max_m, "in [piece_min_m, 100]");
+    if (!(w.doors_per_10m >= 0.0 && w.doors_per_10m <= 10.0))
+      reject("world.rough_walls.doors_per_10m", w.doors_per_10m, "in [0, 10]");
+    if (!(w.legs_per_10m >= 0.0 && w.legs_per_10m <= 20.0))
+      reject("world.rough_walls.legs_per_10m", w.legs_per_10m, "in [0, 20]");
+    if (!(w.glass_share >= 0.0 && w.glass_share < 1.0))
+      reject("world.rough_walls.glass_share", w.glass_share, "in [0, 1)");
+  }
+  for (std::size_t i = 0; i < world.shelves.size(); ++i) {
+    const ShelfRow& r = world.shelves[i];
+    const std::string field = "world.shelves[" + std::to_string(i) + "]";
+    if (!(r.depth_m >= 0.2 && r.depth_m <= 10.0)) reject(field + ".depth_m", r.depth_m, "in [0.2, 10]");
+    if (!(r.bay_m >= 0.5 && r.bay_m <= 20.0)) reject(field + ".bay_m", r.bay_m, "in [0.5, 20]");
+    if (!(r.fill >= 0.0 && r.fill <= 1.0)) reject(field + ".fill", r.fill, "in [0, 1]");
+    if (!((r.to - r.from).norm() <= 1000.0))
+      reject(field + ".to", (r.to - r.from).norm(), "at most 1000 m from .from");
+  }
   if (!(lidar.dropout >= 0.0 && lidar.dropout < 1.0))
     reject("lidar.dropout", lidar.dropout, "in [0, 1)");
   if (!(sensors.rate_hz > 0.0 && sensors.rate_hz <= 100.0))
@@ -264,13 +388,22 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
   PathFollower robot_path(robot_points, scenario.robot.loop);
   Pose2 pose = scenario.robot.start;
 
-  // Static shapes once.
+  // Static shapes once. Rough walls and shelves are drawn from a generator of their own, so that
+  // a scenario without them gets the same noise as before they existed.
   World base;
-  base.segments = scenario.world.walls;
+  std::mt19937_64 world_rng(seed ^ 0x5eed5eed5eedULL);
+  if (scenario.world.rough_walls) {
+    for (const Segment& wall : scenario.world.walls)
+      add_rough_wall(wall, *scenario.world.rough_walls, world_rng, base);
+  } else {
+    base.segments = scenario.world.walls;
+  }
+  for (const ShelfRow& row : scenario.world.shelves) add_shelf_row(row, world_rng, base);
   for (const Rectangle& r : scenario.world.rectangles) {
     for (const Segment& s : rectangle_edges(r)) base.segments.push_back(s);
   }
-  base.circles = scenario.world.circles;
+  base.circles.insert(base.circles.end(), scenario.world.circles.begin(),
+                      scenario.world.circles.end());
   const auto static_segments = static_cast<std::int32_t>(base.segments.size());
   const auto static_circles = static_cast<std::int32_t>(base.circles.size());
 
@@ -293,6 +426,52 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
       std::max<std::int64_t>(1, std::lround(1.0 / (scenario.sensors.rate_hz * kStep)));
   const auto scan_every = std::max<std::int64_t>(1, std::lround(1.0 / (lidar.rate_hz * kStep)));
   double v = 0.0, w = 0.0;
+
+  // The sweep: beam i is measured at i * time_increment after the stamp, from where the laser is
+  // then (the robot's motion over that time at its current speed and turn rate).
+  const double time_increment =
+      lidar.sweep ? lidar.resolution_deg / (360.0 * lidar.rate_hz) : 0.0;
+  const auto beam_pose = [&](const Pose2& base, double vv, double ww, double dt) {
+    if (dt <= 0.0) return base * scenario.robot.laser_mount;
+    const double dx = std::abs(ww) < 1e-9 ? vv * dt : vv / ww * std::sin(ww * dt);
+    const double dy = std::abs(ww) < 1e-9 ? 0.0 : vv / ww * (1.0 - std::cos(ww * dt));
+    return base * Pose2{dx, dy, ww * dt} * scenario.robot.laser_mount;
+  };
+  // Casts the scan, in blocks of beams that share one laser pose (8 beams: 1.5 mm apart at
+  // 1.5 m/s and 0.17 degrees at 20 Hz).
+  const auto cast_scan = [&](const World& world, const Pose2& base, double vv, double ww,
+                             LaserScan& scan, std::vector<std::int32_t>& hit) {
+    scan = raycast(world, base * scenario.robot.laser_mount, geometry, &hit);
+    if (time_increment <= 0.0) return;
+    constexpr std::int32_t kBlock = 8;
+    std::vector<std::int32_t> block_hit;
+    for (std::int32_t b0 = 0; b0 < geometry.beam_count; b0 += kBlock) {
+      ScanGeometry g = geometry;
+      g.angle_min_rad = geometry.angle_min_rad + b0 * geometry.angle_increment_rad;
+      g.beam_count = std::min(kBlock, geometry.beam_count - b0);
+      const double dt = (b0 + 0.5 * (g.beam_count - 1)) * time_increment;
+      const LaserScan part = raycast(world, beam_pose(base, vv, ww, dt), g, &block_hit);
+      for (std::int32_t k = 0; k < g.beam_count; ++k) {
+        scan.ranges_m[static_cast<std::size_t>(b0 + k)] = part.ranges_m[static_cast<std::size_t>(k)];
+        hit[static_cast<std::size_t>(b0 + k)] = block_hit[static_cast<std::size_t>(k)];
+      }
+    }
+  };
+  // Mixed pixels: the beam at a depth edge, on the near side, returns a range between.
+  const auto add_mixed_pixels = [&](LaserScan& scan, const std::vector<std::int32_t>& hit) {
+    if (!(lidar.mixed_pixels > 0.0)) return;
+    const std::vector<float> ideal = scan.ranges_m;
+    for (std::size_t i = 0; i < ideal.size(); ++i) {
+      if (hit[i] < 0) continue;
+      for (const std::size_t j : {i - 1, i + 1}) {
+        if (j >= ideal.size() || hit[j] < 0 || !(ideal[j] > ideal[i] + 0.2F)) continue;
+        if (u01(rng) < lidar.mixed_pixels) {
+          scan.ranges_m[i] = ideal[i] + static_cast<float>(u01(rng)) * (ideal[j] - ideal[i]);
+          break;
+        }
+      }
+    }
+  };
 
   for (std::int64_t step = 0; step <= steps; ++step) {
     const double t = scenario.start_time_s + static_cast<double>(step) * kStep;
@@ -331,8 +510,10 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
       ScanFrame frame;
       frame.base_pose = pose;
       std::vector<std::int32_t> hit;
-      frame.scan = raycast(world, pose * scenario.robot.laser_mount, geometry, &hit);
+      cast_scan(world, pose, v, w, frame.scan, hit);
       frame.scan.stamp_s = t;
+      frame.scan.time_increment_s = time_increment;
+      add_mixed_pixels(frame.scan, hit);
       frame.truth.assign(hit.size(), Truth::kNoReturn);
       frame.actor.assign(hit.size(), 0);
       for (std::size_t i = 0; i < hit.size(); ++i) {
@@ -348,7 +529,16 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
           r = std::numeric_limits<float>::infinity();
           continue;
         }
-        r += static_cast<float>(lidar.range_noise_m * n01(rng));
+        double sigma = lidar.range_noise_m + lidar.range_noise_per_m * r;
+        if (lidar.incidence_noise > 0.0) {
+          const double bearing = frame.scan.bearing_rad(i);
+          const Pose2 laser = beam_pose(pose, v, w, static_cast<double>(i) * time_increment);
+          const Eigen::Vector2d dir(std::cos(laser.yaw_rad + bearing),
+                                    std::sin(laser.yaw_rad + bearing));
+          const double c = incidence_cosine(world, hit[i], laser.translation(), dir, r);
+          sigma *= 1.0 + lidar.incidence_noise * (1.0 / c - 1.0);
+        }
+        r += static_cast<float>(sigma * n01(rng));
         if (r < geometry.range_min_m) {  // Noise cannot make a return nearer than the minimum.
           r = std::numeric_limits<float>::infinity();
           continue;

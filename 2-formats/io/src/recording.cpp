@@ -67,6 +67,7 @@ ScanMessage scan_message(const LaserScan& scan, const std::string& frame_id) {
   m.header.stamp = Stamp::from_seconds(scan.stamp_s);
   m.header.frame_id = frame_id;
   m.scan = scan;
+  m.time_increment = static_cast<float>(scan.time_increment_s);
   const double last = static_cast<double>(scan.size() > 0 ? scan.size() - 1 : 0);
   m.angle_max = static_cast<float>(scan.angle_min_rad + scan.angle_increment_rad * last);
   return m;

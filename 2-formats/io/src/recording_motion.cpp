@@ -17,6 +17,10 @@ constexpr std::int64_t kPeriodScans = 200;
 
 std::optional<Pose2> RecordingMotion::sensor_pose(double stamp_s, PoseLookup* why) const {
   if (static_sensor) return Pose2{};
+  if (laser_only) {
+    if (why != nullptr) *why = PoseLookup::kEmpty;
+    return std::nullopt;
+  }
   Pose2 base;
   const PoseLookup found = base_poses.lookup(stamp_s, base);
   if (why != nullptr) *why = found;
@@ -39,8 +43,11 @@ RecordingMotion read_motion(RecordingReader& reader, const MotionQuery& q,
                      " (LaserScan topics: " + topics.list(MessageKind::kLaserScan) + ")" +
                      q.missing_scan_hint);
   }
-  m.static_sensor = !q.pose_topic;
-  if (q.pose_topic && !topics.has(*q.pose_topic, MessageKind::kOdometry)) {
+  m.laser_only = q.laser_only || (q.laser_only_without_odometry && q.pose_topic &&
+                                  topics.of_kind(MessageKind::kOdometry).empty());
+  m.static_sensor = !q.pose_topic && !m.laser_only;
+  const bool read_poses = q.pose_topic && !m.laser_only;
+  if (read_poses && !topics.has(*q.pose_topic, MessageKind::kOdometry)) {
     throw InputError(path + ": no nav_msgs/Odometry topic " + *q.pose_topic +
                      " (Odometry topics: " + topics.list(MessageKind::kOdometry) + ")" +
                      q.missing_pose_hint);
@@ -50,7 +57,7 @@ RecordingMotion read_motion(RecordingReader& reader, const MotionQuery& q,
   m.base_poses = PoseBuffer(q.pose_tolerance_s, q.pose_max_gap_s);
 
   std::vector<std::string> wanted{m.scan_topic, "/tf", "/tf_static"};
-  if (q.pose_topic) wanted.push_back(*q.pose_topic);
+  if (read_poses) wanted.push_back(*q.pose_topic);
   std::int64_t decoded = 0;
   bool have_pose_frames = false;
   pipeline::ScanPeriod period;
@@ -67,7 +74,7 @@ RecordingMotion read_motion(RecordingReader& reader, const MotionQuery& q,
         m.laser_frame = FrameTree::normalise(scan->header.frame_id);
       }
       period.add(scan->scan.stamp_s, scan->scan_time);
-    } else if (q.pose_topic && msg.topic() == *q.pose_topic) {
+    } else if (read_poses && msg.topic() == *q.pose_topic) {
       const std::optional<OdometryMessage> odom = msg.odometry();
       if (!odom) return;
       if (!have_pose_frames) {
@@ -87,7 +94,7 @@ RecordingMotion read_motion(RecordingReader& reader, const MotionQuery& q,
   });
   if (decoded == 0) throw InputError(path + ": no scans on " + m.scan_topic);
   m.scan_period_s = period.period();
-  if (m.static_sensor) return m;
+  if (m.static_sensor || m.laser_only) return m;
   if (m.base_poses.empty()) throw InputError(path + ": no usable poses on " + *q.pose_topic);
   // Only fixed mounts: not the robot's motion in the fixed frame, odom or map.
   FrameTree mounts;

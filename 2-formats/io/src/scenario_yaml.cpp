@@ -78,7 +78,39 @@ class Reader {
 };
 
 void read_world(const Reader& r, const YAML::Node& n, sim::StaticWorld& w) {
-  r.keys(n, "world", {"walls", "polylines", "rectangles", "circles"});
+  r.keys(n, "world", {"walls", "polylines", "rectangles", "circles", "shelves", "rough_walls"});
+  if (n["rough_walls"]) {
+    const YAML::Node& e = n["rough_walls"];
+    r.keys(e, "world.rough_walls",
+           {"amplitude_m", "piece_min_m", "piece_max_m", "doors_per_10m", "legs_per_10m",
+            "glass_share"});
+    sim::RoughWalls rw;
+    const std::pair<const char*, double*> fields[] = {{"amplitude_m", &rw.amplitude_m},
+                                                      {"piece_min_m", &rw.piece_min_m},
+                                                      {"piece_max_m", &rw.piece_max_m},
+                                                      {"doors_per_10m", &rw.doors_per_10m},
+                                                      {"legs_per_10m", &rw.legs_per_10m},
+                                                      {"glass_share", &rw.glass_share}};
+    for (const auto& [key, field] : fields) {
+      if (e[key]) *field = r.number(e[key], std::string("world.rough_walls.") + key);
+    }
+    w.rough_walls = rw;
+  }
+  if (n["shelves"]) {
+    if (!n["shelves"].IsSequence()) r.fail("world.shelves must be a list");
+    for (std::size_t i = 0; i < n["shelves"].size(); ++i) {
+      const std::string path = "world.shelves[" + std::to_string(i) + "]";
+      const YAML::Node& e = n["shelves"][i];
+      r.keys(e, path, {"from", "to", "depth_m", "bay_m", "fill"});
+      sim::ShelfRow row;
+      row.from = r.point(e["from"], path + ".from");
+      row.to = r.point(e["to"], path + ".to");
+      if (e["depth_m"]) row.depth_m = r.number(e["depth_m"], path + ".depth_m");
+      if (e["bay_m"]) row.bay_m = r.number(e["bay_m"], path + ".bay_m");
+      if (e["fill"]) row.fill = r.number(e["fill"], path + ".fill");
+      w.shelves.push_back(row);
+    }
+  }
   if (n["walls"]) {
     for (std::size_t i = 0; i < n["walls"].size(); ++i) {
       const auto v = r.numbers(n["walls"][i], "world.walls[" + std::to_string(i) + "]", 4);
@@ -145,7 +177,14 @@ void read_robot(const Reader& r, const YAML::Node& n, sim::RobotConfig& robot) {
 void read_lidar(const Reader& r, const YAML::Node& n, sim::LidarConfig& l) {
   r.keys(n, "lidar",
          {"range_max_m", "fov_deg", "resolution_deg", "rate_hz", "range_limit_m",
-          "masked_sectors_deg", "range_noise_m", "dropout"});
+          "masked_sectors_deg", "range_noise_m", "range_noise_per_m", "incidence_noise",
+          "mixed_pixels", "dropout", "sweep"});
+  if (n["range_noise_per_m"])
+    l.range_noise_per_m = r.number(n["range_noise_per_m"], "lidar.range_noise_per_m");
+  if (n["incidence_noise"])
+    l.incidence_noise = r.number(n["incidence_noise"], "lidar.incidence_noise");
+  if (n["mixed_pixels"]) l.mixed_pixels = r.number(n["mixed_pixels"], "lidar.mixed_pixels");
+  if (n["sweep"]) l.sweep = r.boolean(n["sweep"], "lidar.sweep");
   if (n["range_max_m"]) l.range_max_m = r.number(n["range_max_m"], "lidar.range_max_m");
   if (n["fov_deg"]) l.fov_deg = r.number(n["fov_deg"], "lidar.fov_deg");
   if (n["resolution_deg"]) l.resolution_deg = r.number(n["resolution_deg"], "lidar.resolution_deg");

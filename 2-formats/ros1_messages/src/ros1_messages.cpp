@@ -71,6 +71,7 @@ LaserScan from_ros(const sensor_msgs::LaserScan& msg) {
   scan.angle_increment_rad = msg.angle_increment;
   scan.range_min_m = msg.range_min;
   scan.range_max_m = msg.range_max;
+  scan.time_increment_s = msg.time_increment;
   scan.ranges_m = msg.ranges;
   scan.intensities = msg.intensities;
   return scan;

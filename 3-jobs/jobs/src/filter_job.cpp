@@ -45,6 +45,11 @@ class ScanFilter {
     const FilterResult& result = runner_.process(scan, stated_period_s, pose);
     ++stats_.scans;
     stats_.scan_time_s.push_back(runner_.last_time_s());
+    if (result.registration.registered) {
+      stats_.registration_residual_m.push_back(result.registration.residual_m);
+      stats_.registration_inlier_share.push_back(result.registration.inlier_share);
+      stats_.registration_degeneracy.push_back(result.registration.degeneracy);
+    }
     switch (runner_.last_outcome()) {
       case pipeline::ScanOutcome::kFiltered:
         ++stats_.scans_filtered;
@@ -77,17 +82,27 @@ class ScanFilter {
   FilterJobStats& stats_;
 };
 
+// The frame of the registered poses: the odometry frame at the first scan, or the first scan's
+// sensor frame without odometry.
+constexpr const char* kRegisteredFrame = "dispel_registered";
+
 void write_outputs(io::RecordingWriter& out, const std::string& scan_topic, io::Stamp time,
                    const io::ScanMessage& scan, const FilterResult& result) {
   out.write(scan_topic + "_filtered", time, io::filtered_message(scan, result));
   out.write(scan_topic + "_labels", time, io::labels_message(scan, result));
+  // The registered sensor pose (registration on): the laser in the filter's fixed frame.
+  if (result.sensor_pose && result.registration.points > 0) {
+    out.write(scan_topic + "_pose", time,
+              io::odometry_message(scan.scan.stamp_s, kRegisteredFrame, scan.header.frame_id,
+                                   *result.sensor_pose, 0.0, 0.0));
+  }
 }
 
 // ------------------------------------------------------------------------------------------
 // Recordings (ROS 1 bags).
 
 FilterJobStats run_recording(const FilterJobOptions& o, const Progress& progress,
-                             const std::atomic<bool>* cancel) {
+                             const std::atomic<bool>* cancel, const Notice& notice) {
   FilterJobStats stats;
   const std::unique_ptr<io::RecordingReader> in = open_recording(o.input);
   stats.input_format = in->format_name();
@@ -101,7 +116,10 @@ FilterJobStats run_recording(const FilterJobOptions& o, const Progress& progress
   }
   io::MotionQuery query;
   query.scan_topic = o.scan_topic;
+  const DynamicFilterConfig config = base_config(o);
   query.pose_topic = o.static_sensor ? std::nullopt : std::optional<std::string>(o.odom_topic);
+  query.laser_only = !o.static_sensor && o.odom_topic == "none";
+  query.laser_only_without_odometry = config.registration.enabled;
   query.pose_tolerance_s = o.odom_tolerance_s;
   query.missing_scan_hint = "; choose one with --scan-topic";
   query.missing_pose_hint =
@@ -111,6 +129,20 @@ FilterJobStats run_recording(const FilterJobOptions& o, const Progress& progress
       as_job([&] { return io::read_motion(*in, query, [&] { check_cancelled(cancel); }); });
   check_period(o, motion.scan_period_s, motion.first_scan);
   stats.odometry_refused = motion.poses_refused;
+  stats.laser_only = motion.laser_only;
+  if (motion.laser_only) {
+    if (!config.registration.enabled) {
+      throw JobError(o.input +
+                     ": --odom-topic none needs the scan registration (registration.enabled: "
+                     "true; the thesis preset has it off)");
+    }
+    if (notice) {
+      notice(o.odom_topic == "none"
+                 ? "laser-only (--odom-topic none): each scan registered to the earlier ones"
+                 : o.input + " has no nav_msgs/Odometry topic: filtering laser-only, each scan "
+                             "registered to the earlier ones");
+    }
+  }
 
   ScanFilter filter(o, stats);
   const std::unique_ptr<io::RecordingWriter> out = create_recording(o.output, o.compression);
@@ -201,14 +233,14 @@ FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
 }  // namespace
 
 FilterJobStats run_filter_job(const FilterJobOptions& options, const Progress& progress,
-                              const std::atomic<bool>* cancel) {
+                              const std::atomic<bool>* cancel, const Notice& notice) {
   check_input_file(options.input);
   if (options.output.empty()) throw JobError("no output file given (-o OUT.bag)");
   if (options.config_path) base_config(options);  // Fail on a bad config before any reading.
   if (ends_with(options.input, ".log") || ends_with(options.input, ".clf")) {
     return run_carmen(options, progress, cancel);
   }
-  return run_recording(options, progress, cancel);
+  return run_recording(options, progress, cancel, notice);
 }
 
 }  // namespace dispel::jobs

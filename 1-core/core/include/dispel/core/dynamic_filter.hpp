@@ -15,6 +15,7 @@
 #include "dispel/core/free_space_map.hpp"
 #include "dispel/core/laser_scan.hpp"
 #include "dispel/core/pose2.hpp"
+#include "dispel/core/scan_registration.hpp"
 #include "dispel/core/segmentation.hpp"
 #include "dispel/core/velocity_filter.hpp"
 
@@ -41,8 +42,8 @@ enum class FilterEvent : std::uint8_t {
   kResetTimeBackwards,  ///< The stamp is earlier than the previous one: tracks reset.
   kResetTimeGap,        ///< More than max_time_gap_s since the previous scan: tracks reset.
   kResetPoseJump,       ///< The sensor pose jumped: tracks reset.
-  kNoPose,              ///< No sensor pose was given (none known at the scan's time): passed
-                        ///< through unchanged.
+  kNoPose,              ///< No sensor pose was given (none known at the scan's time) and the
+                        ///< registration is off: passed through unchanged.
 };
 inline constexpr std::size_t kFilterEventCount = 9;
 
@@ -64,6 +65,16 @@ struct FilterCounters {
   /// Beams of no object removed as fragments of a dynamic track (tracking.fragment_distance_m);
   /// included in beams_removed_dynamic.
   std::int64_t beams_removed_fragments = 0;
+  /// Beams of moving or unknown objects kept because the registered map explains them
+  /// (registration.explained_*).
+  std::int64_t beams_kept_explained = 0;
+  /// Registration (when on): scans aligned with the map, scans that fell back to their seed
+  /// (odometry or constant velocity), registered scans with an unconstrained direction, and
+  /// scans registered without odometry.
+  std::int64_t scans_registered = 0;
+  std::int64_t registration_fallbacks = 0;
+  std::int64_t registration_degenerate = 0;
+  std::int64_t scans_without_odometry = 0;
 };
 
 /// A tracked object as reported to the caller. Positions and velocities are in the fixed frame.
@@ -97,6 +108,11 @@ struct FilterResult {
   /// Beams removed in this scan.
   std::int32_t removed_dynamic = 0;
   std::int32_t removed_unknown = 0;
+  /// The sensor pose the scan was filtered with (registered when the registration is on), in the
+  /// filter's fixed frame; unset when the scan was passed through.
+  std::optional<Pose2> sensor_pose;
+  /// How the scan registered (all zero when the registration is off).
+  RegistrationReport registration;
 };
 
 /// The dynamic object filter. Feed it scans in time order with the pose of the sensor in a fixed
@@ -108,7 +124,9 @@ class DynamicFilter {
   explicit DynamicFilter(DynamicFilterConfig config);
 
   /// Filters one scan (thesis Figure 3.3). @p sensor_pose is the laser frame in the fixed frame
-  /// at scan.stamp_s, or std::nullopt when none is known: the scan is then passed through
+  /// (odometry) at scan.stamp_s, or std::nullopt when none is known. With the registration on,
+  /// the scan is registered to the local map, seeded by the pose (or, without one, by constant
+  /// velocity: laser-only recordings). With it off, a scan without a pose is passed through
   /// unchanged (FilterEvent::kNoPose) and the tracks wait for the next scan with a pose.
   void process(const LaserScan& scan, const std::optional<Pose2>& sensor_pose, FilterResult& out);
 
@@ -140,6 +158,8 @@ class DynamicFilter {
     bool ambiguous;  // Touches the field-of-view end or a masked sector.
     double extent_m;
     std::int32_t point_count;
+    double explained_share;  // Of its beams, the share the registered map explains.
+    Eigen::Vector2d local_centroid;  // In the sensor frame.
   };
   struct Track {
     std::uint64_t id;
@@ -153,6 +173,10 @@ class DynamicFilter {
     double extent_m;
     double speed_mps;
     std::int32_t object_index;
+    // Where the object stands in the sensor frame, and since when it has stood there: a part of
+    // the robot (or something it carries) moves with the sensor.
+    Eigen::Vector2d local_anchor;
+    double local_still_since_s;
   };
 
   // What the first step decides about a scan.
@@ -165,6 +189,7 @@ class DynamicFilter {
   // The steps of process(), in order (thesis Figure 3.3).
   ScanCheck check(const LaserScan& scan, const std::optional<Pose2>& sensor_pose);
   void observe(const Segmentation& segmentation, const Pose2& sensor_pose, float range_max_m);
+  void explain(const LaserScan& scan, const Segmentation& segmentation);
   void match(double stamp_s);
   void update_velocities(double stamp_s);
   void classify(const LaserScan& scan, const Pose2& sensor_pose, const Segmentation& segmentation);
@@ -198,10 +223,15 @@ class DynamicFilter {
   FilterCounters counters_;
   std::vector<Track> tracks_;
   FreeSpaceMap free_space_;
+  ScanRegistration registration_;
+  std::vector<char> explained_;  // Per beam of this scan (registration on).
+  std::vector<std::int32_t> explained_count_;  // Scratch: per object.
+  std::vector<char> keep_;       // Scratch: beams the map learns,
+  std::vector<char> in_free_;    // and which of them end in space seen free.
+  std::optional<Pose2> previous_input_pose_;  // The pose given with the previous scan.
   std::uint64_t next_id_ = 1;
   bool have_previous_ = false;
   double previous_stamp_s_ = 0.0;
-  Pose2 previous_pose_;
 
   // Per scan, reused between scans: one entry per object of the segmentation.
   std::vector<Observation> observations_;

@@ -6,6 +6,7 @@
 
 #include "dispel/core/classification.hpp"
 #include "dispel/core/free_space_map.hpp"
+#include "dispel/core/scan_registration.hpp"
 #include "dispel/core/segmentation.hpp"
 #include "dispel/core/velocity_filter.hpp"
 
@@ -68,6 +69,11 @@ struct DynamicFilterConfig {
   /// Beyond the thesis: an object that appears where beams used to pass freely is dynamic at
   /// once, and beams ending where something has stood for long are kept.
   FreeSpaceConfig free_space;
+  /// Beyond the thesis: each scan is registered to a local map of what has stayed static (the
+  /// odometry only seeds it; without odometry a constant-velocity guess does), and an object the
+  /// map explains (a surface seen in many scans over time) is not moving, however its outline
+  /// slides while the robot drives past it.
+  RegistrationConfig registration;
   /// A larger gap between two scans resets the tracks (they can no longer be followed).
   double max_time_gap_s = 1.0;
   /// A larger change of the sensor pose between two consecutive scans is a jump of the fixed
@@ -82,7 +88,7 @@ struct DynamicFilterConfig {
 /// The thesis's filter: its parameters (Appendix A: eps 0.1 m, N_min 8, D 0.25 m, L_d 18, L_s 50,
 /// L_v 0.08 m/s, sigma_p^2 0.75, sigma_v^2 1.5, sigma_m^2 15, gamma 0.8) and its rules: gaps as
 /// |r1 - r2|, nearest-neighbour matching, "dynamic for good", weights that only grow; every rule
-/// beyond it off (split inheritance, companions, fragments, free space). Where the thesis gives no
+/// beyond it off (split inheritance, companions, fragments, free space, registration). Where the thesis gives no
 /// value (how long an unseen track is kept, the time gap and pose jump that reset the tracks)
 /// the values are dispel's earlier ones: 10 missed scans, 1 s, 0.5 m and 0.5 rad.
 DynamicFilterConfig thesis_config();

@@ -19,6 +19,9 @@ struct LaserScan {
   double angle_increment_rad = 0.0;  ///< Bearing step between beams; must be > 0.
   float range_min_m = 0.0F;          ///< Shortest valid range.
   float range_max_m = 0.0F;          ///< Longest valid range (may be +infinity).
+  /// Time between two beams, seconds (sensor_msgs/LaserScan time_increment): beam i is measured
+  /// at stamp_s + i * time_increment_s. 0 when the scanner states none (all beams at stamp_s).
+  double time_increment_s = 0.0;
   std::vector<float> ranges_m;       ///< One range per beam.
   std::vector<float> intensities;    ///< Empty, or one value per beam.
 

@@ -22,11 +22,38 @@ struct Rectangle {
   double yaw_rad = 0.0;
 };
 
+/// What makes the walls of a real building rough (drawn from the seed, applied to every wall):
+/// the wall is cut into pieces, each set back or forward (recesses, pillars, panels, skirting),
+/// joined by short steps; some pieces are glass (no return); doors are gaps with a recess behind;
+/// furniture legs stand in front of it.
+struct RoughWalls {
+  double amplitude_m = 0.05;   ///< Each piece is offset by up to this much along the normal.
+  double piece_min_m = 0.3;    ///< Length of a piece, drawn uniformly between these.
+  double piece_max_m = 2.0;
+  double doors_per_10m = 1.0;  ///< 0.9 m gaps with a 0.25 m deep recess.
+  double legs_per_10m = 2.0;   ///< Pairs of furniture legs (2.5 cm radius) 0.15-0.6 m off the wall.
+  double glass_share = 0.1;    ///< Share of pieces that return nothing.
+};
+
+/// A row of shelving (a warehouse rack): uprights every bay and, in each bay with probability
+/// fill, a box set back from the aisle by up to 0.3 m: a face with gaps through which the scanner
+/// sees the next aisle.
+struct ShelfRow {
+  Eigen::Vector2d from = Eigen::Vector2d::Zero();
+  Eigen::Vector2d to = Eigen::Vector2d::Zero();
+  double depth_m = 1.0;
+  double bay_m = 2.7;
+  double fill = 0.7;
+};
+
 /// Static structure.
 struct StaticWorld {
   std::vector<Segment> walls;  ///< Walls and polyline pieces.
   std::vector<Rectangle> rectangles;
   std::vector<Circle> circles;
+  std::vector<ShelfRow> shelves;
+  /// When set, every wall is made rough (rectangles, circles and shelves stay as they are).
+  std::optional<RoughWalls> rough_walls;
 };
 
 /// The thesis's lawnmower pattern: straight lanes along x joined by half-circle U-turns.
@@ -58,7 +85,19 @@ struct LidarConfig {
   /// Sectors [begin_deg, end_deg] in the laser frame that return nothing (the thesis's mirrors).
   std::vector<std::pair<double, double>> masked_sectors_deg;
   double range_noise_m = 0.01;  ///< Gaussian, standard deviation.
-  double dropout = 0.002;       ///< Probability that a beam returns nothing.
+  /// The noise grows with range: standard deviation range_noise_m + range_noise_per_m * range.
+  double range_noise_per_m = 0.0;
+  /// And with incidence: multiplied by 1 + incidence_noise * (1 / cos(incidence) - 1), the cosine
+  /// taken at least 0.1 (a grazing beam spreads over the surface).
+  double incidence_noise = 0.0;
+  /// Probability that a beam at a depth edge (a neighbour more than 0.2 m farther) returns a
+  /// range between the near and the far surface (a mixed pixel).
+  double mixed_pixels = 0.0;
+  double dropout = 0.002;  ///< Probability that a beam returns nothing.
+  /// Beams are measured over the sweep: beam i at stamp + i * time_increment, where
+  /// time_increment is one revolution (1 / rate_hz) divided by the beams a full turn would have;
+  /// the robot moves during the scan. false: every beam at the stamp (time_increment 0).
+  bool sweep = false;
 };
 
 struct SensorConfig {

@@ -26,6 +26,10 @@ struct MotionQuery {
   /// The nav_msgs/Odometry topic with the robot's pose (odometry, or the simulator's ground
   /// truth); std::nullopt: the sensor does not move (identity pose, no mount needed).
   std::optional<std::string> pose_topic = std::string("/odom");
+  /// No poses: the scans alone (the filter registers them). The pose topic and mount are not read.
+  bool laser_only = false;
+  /// Laser-only, instead of an error, when the recording has no nav_msgs/Odometry topic at all.
+  bool laser_only_without_odometry = false;
   /// The fixed frame when the pose topic's messages name none.
   std::string default_fixed_frame = "odom";
   /// How far before the first or after the last pose a scan's pose may be taken from it, and
@@ -49,6 +53,8 @@ struct RecordingMotion {
   /// the scans tell it.
   std::optional<double> scan_period_s;
   bool static_sensor = false;
+  /// No poses (MotionQuery::laser_only, or no odometry topic): sensor_pose() is always unset.
+  bool laser_only = false;
   std::string fixed_frame;         ///< The frame of the poses ("odom", or the topic's).
   std::string base_frame;          ///< The robot's frame (the pose topic's child frame).
   PoseBuffer base_poses;           ///< The robot in the fixed frame; empty for a static sensor.

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -22,6 +23,8 @@ struct FilterJobOptions {
   std::optional<std::string> config_path;     ///< YAML; DynamicFilterConfig{} without it.
   std::optional<DynamicFilterConfig> config;  ///< Used instead of config_path when given.
   std::string scan_topic = "/scan";
+  /// "none": laser-only (each scan registered to the map of the earlier ones; needs
+  /// registration.enabled). A recording without any odometry topic is filtered laser-only too.
   std::string odom_topic = "/odom";
   bool static_sensor = false;     ///< The sensor does not move: identity pose, no odometry.
   bool scale_to_scanner = false;  ///< Apply scale_to_scanner() with the recording's scanner.
@@ -32,6 +35,7 @@ struct FilterJobOptions {
 
 /// What the job did.
 struct FilterJobStats {
+  bool laser_only = false;          ///< Filtered without odometry (registered scans only).
   std::string input_format;         ///< "rosbag" or "carmen".
   std::int64_t messages_in = 0;     ///< Messages (bag) or lines (CARMEN) read.
   std::int64_t messages_out = 0;    ///< Messages written.
@@ -43,15 +47,24 @@ struct FilterJobStats {
   std::map<std::string, std::int64_t> scans_skipped;
   FilterCounters counters;          ///< The filter's own counters.
   std::vector<double> scan_time_s;  ///< Processing time of each scan, seconds.
+  /// Per registered scan (registration on): RMS point-to-line residual (m), share of points
+  /// with a correspondence, and degeneracy (weakest / strongest translation information).
+  std::vector<double> registration_residual_m;
+  std::vector<double> registration_inlier_share;
+  std::vector<double> registration_degeneracy;
   DynamicFilterConfig config;       ///< The configuration used (scaled to the scanner if asked).
   std::optional<double> scan_period_s;  ///< The scanner's period, when it was needed and known.
   std::int64_t malformed_lines = 0;     ///< CARMEN only: skipped lines.
   std::int64_t odometry_refused = 0;    ///< Odometry messages out of order or not finite.
 };
 
+/// Told once, before the scans are filtered, something the user should know (laser-only).
+using Notice = std::function<void(const std::string&)>;
+
 /// Runs the job. The output appears only when complete (written to "<output>.partial" and
 /// renamed). @throws JobError, JobCancelled
 FilterJobStats run_filter_job(const FilterJobOptions& options, const Progress& progress = {},
-                              const std::atomic<bool>* cancel = nullptr);
+                              const std::atomic<bool>* cancel = nullptr,
+                              const Notice& notice = {});
 
 }  // namespace dispel::jobs

@@ -1,0 +1,160 @@
+#pragma once
+/// @file
+/// Scan-to-map registration: each scan is aligned with a local map of what has been static
+/// (point-to-line ICP with a robust kernel and an adaptive threshold over a voxel-hashed map, the
+/// design of KISS-ICP in the plane), seeded by the odometry when there is one and by a
+/// constant-velocity guess when there is none. The same map says which points it explains: a
+/// surface seen in many scans spread over time.
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "dispel/core/laser_scan.hpp"
+#include "dispel/core/pose2.hpp"
+
+namespace dispel {
+
+/// Parameters of the registration and its local map. Defaults are dispel's.
+struct RegistrationConfig {
+  /// false: the sensor pose is the one given (odometry), as in the thesis.
+  bool enabled = true;
+  double voxel_size_m = 0.25;     ///< Side of a map voxel.
+  int max_points_per_voxel = 4;   ///< Points kept per voxel (later ones only count the scan).
+  double scan_spacing_m = 0.05;   ///< The scan is thinned to points at least this far apart.
+  double max_range_m = 30.0;      ///< Returns farther than this are not registered.
+  double local_map_radius_m = 30.0;  ///< Voxels farther from the sensor are forgotten.
+  int max_iterations = 20;
+  /// The correspondence threshold adapts to how far the registration moved the seed (KISS-ICP):
+  /// three standard deviations of that, between these limits; initial_threshold_m until known.
+  double initial_threshold_m = 0.5;
+  double min_threshold_m = 0.1;
+  double max_threshold_m = 1.0;
+  /// A scan registers when at least this share of its points found a correspondence and the
+  /// correction of the seed stays within max_correction_m / max_correction_rad; otherwise the
+  /// seed is used (counted as a fallback).
+  double min_inlier_share = 0.2;
+  int min_points = 20;
+  double max_correction_m = 0.5;
+  double max_correction_rad = 0.35;
+  /// The noise of a return (m) and of the seed's motion per scan: the odometry's, and a
+  /// constant-velocity guess's (no odometry). The seed counts against the points with these.
+  double range_noise_m = 0.03;
+  double odometry_noise_m = 0.02;
+  double odometry_noise_rad = 0.01;
+  double constant_velocity_noise_m = 0.2;
+  double constant_velocity_noise_rad = 0.1;
+  /// A scan is degenerate (a corridor with nothing ahead) when the weakest direction of its
+  /// translation information is below this share of the strongest; along that direction the seed
+  /// holds (the seed's noise keeps it).
+  double degeneracy_ratio = 0.02;
+  /// Structure, the only part of the map scans register to and the part that explains points:
+  /// voxels hit in at least explained_min_scans scans spread over at
+  /// least explained_min_span_s, a point within explained_distance_m of one of their points.
+  int explained_min_scans = 4;
+  double explained_min_span_s = 0.6;
+  double explained_min_span_in_free_s = 5.0;
+  double explained_distance_m = 0.12;
+  /// Structure explains only while seen: hit within this long before the scan.
+  double explained_max_age_s = 0.5;
+  /// Beams are de-skewed by their time_increment with the motion since the previous scan.
+  bool deskew = true;
+
+  /// Throws std::invalid_argument naming the first bad field.
+  void validate() const;
+};
+
+/// How one scan registered.
+struct RegistrationReport {
+  bool registered = false;  ///< Aligned with the map (false: first scan, fallback, disabled).
+  bool fallback = false;    ///< Could not register: the seed was used.
+  bool degenerate = false;  ///< Registered, with a direction the scan does not constrain.
+  bool seeded_by_odometry = false;
+  std::int32_t points = 0;        ///< Points of the thinned scan.
+  std::int32_t iterations = 0;
+  double inlier_share = 0.0;      ///< Share of the points with a correspondence.
+  double residual_m = 0.0;        ///< RMS point-to-line distance of the inliers.
+  double degeneracy = 0.0;        ///< Weakest / strongest translation information (0..1).
+  double threshold_m = 0.0;       ///< The correspondence threshold used.
+  Pose2 correction;               ///< Registered pose relative to the seed.
+};
+
+/// Registers scans to a local map and says which points it explains. Feed scans in time order;
+/// after labelling, add() the beams that stay static. Not thread-safe.
+class ScanRegistration {
+ public:
+  explicit ScanRegistration(RegistrationConfig config);
+
+  /// Registers @p scan. @p odometry_pose is the sensor in the odometry frame at the scan's stamp
+  /// (std::nullopt: none; the motion is guessed from the last two registered poses). Returns the
+  /// sensor's pose in the registration's fixed frame (the odometry frame at the first scan, or
+  /// the first scan's sensor frame when there is no odometry). Fills the scan's points in that
+  /// frame (points(): one per beam, de-skewed; NaN for invalid beams).
+  Pose2 register_scan(const LaserScan& scan, const std::optional<Pose2>& odometry_pose,
+                      RegistrationReport& report);
+
+  /// The last registered scan's beams in the fixed frame (NaN where invalid).
+  const std::vector<Eigen::Vector2d>& points() const { return world_points_; }
+
+  /// Whether the map explains beam @p b of the last registered scan (see RegistrationConfig).
+  /// Valid after register_scan() and before add().
+  bool explained(std::size_t b) const;
+
+  /// Adds the beams of the last registered scan for which @p keep is true to the map, and forgets
+  /// voxels beyond local_map_radius_m. @p appeared_in_free_space (empty, or one per beam) says
+  /// which beams end where the scanner saw through before: a voxel first hit by such a beam (a
+  /// cart driving along itself, a walker's trail) is not structure until it has been hit for
+  /// explained_min_span_in_free_s.
+  void add(const std::vector<char>& keep, const std::vector<char>& appeared_in_free_space);
+
+  /// Forgets the map and the motion (after a jump in time or of the fixed frame).
+  void reset();
+
+  std::size_t voxel_count() const { return map_.size(); }
+  const RegistrationConfig& config() const { return config_; }
+
+ private:
+  struct Voxel {
+    std::array<Eigen::Vector2f, 4> points;
+    std::array<Eigen::Vector2f, 4> normals;
+    std::uint8_t count = 0;
+    std::int32_t scans = 0;        // Scans that hit it.
+    bool in_free_space = false;    // First hit where the scanner had seen through.
+    std::uint32_t last_scan = 0;   // The last one.
+    double first_stamp_s = 0.0;
+    double last_stamp_s = 0.0;
+  };
+  using Key = std::uint64_t;
+  static Key key_at(std::int64_t ix, std::int64_t iy);
+  Key key_of(const Eigen::Vector2d& p) const;
+  bool structure(const Voxel& v) const;
+  void thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s);
+
+  RegistrationConfig config_;
+  std::unordered_map<Key, Voxel> map_;
+  std::uint32_t scan_count_ = 0;
+  bool have_previous_ = false;
+  double previous_stamp_s_ = 0.0;
+  Pose2 previous_pose_;                   // Registered.
+  std::optional<Pose2> previous_odometry_;
+  Pose2 velocity_per_s_;                  // Sensor-frame motion per second, last estimate.
+  Pose2 odometry_to_fixed_;               // Registered fixed frame from the odometry frame.
+  double model_error_sum_ = 0.0;          // Adaptive threshold: squared deviations, count.
+  std::int64_t model_error_count_ = 0;
+  double last_stamp_s_ = 0.0;
+  Pose2 last_pose_;
+  // Per scan.
+  std::vector<Eigen::Vector2d> local_points_;  // Per beam, de-skewed, in the sensor frame.
+  std::vector<Eigen::Vector2d> world_points_;  // Per beam, in the fixed frame.
+  std::vector<Eigen::Vector2d> normals_;       // Per beam, sensor frame (zero if none).
+  std::vector<std::int32_t> sample_;           // Beams used for registration.
+  // Candidate map points of each sampled point (gathered once per registration).
+  std::vector<std::int32_t> candidate_begin_;
+  std::vector<Eigen::Vector2d> candidate_points_;
+  std::vector<Eigen::Vector2d> candidate_normals_;
+};
+
+}  // namespace dispel

@@ -1,0 +1,392 @@
+// Scan-to-map registration (scan_registration.hpp): thin and de-skew the scan, seed, point-to-line
+// Gauss-Newton with a Geman-McClure kernel against the local voxel map, check, learn the threshold.
+#include "dispel/core/scan_registration.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "dispel/core/invalid_field.hpp"
+
+namespace dispel {
+namespace {
+
+constexpr auto reject = reject_field;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// A pose change that scales with time: motion per second times dt (first order).
+Pose2 scaled(const Pose2& per_s, double dt) {
+  return {per_s.x_m * dt, per_s.y_m * dt, per_s.yaw_rad * dt};
+}
+Eigen::Vector2d perp(const Eigen::Vector2d& v) { return {-v.y(), v.x()}; }
+// Range at which an angular error is turned into metres for the adaptive threshold.
+constexpr double kThresholdRange_m = 10.0;
+// Sensor motion below which a scan says nothing about the seed's error.
+constexpr double kMinMotionForThreshold_m = 0.02;
+// Voxels hit by fewer scans than structure needs are forgotten when unseen this long (the trail
+// of someone walking by).
+constexpr double kTransientMemory_s = 2.0;
+
+}  // namespace
+
+void RegistrationConfig::validate() const {
+  if (!(voxel_size_m >= 0.05 && voxel_size_m <= 5.0))
+    reject("registration.voxel_size_m", voxel_size_m, "in [0.05, 5]");
+  if (max_points_per_voxel < 1 || max_points_per_voxel > 4)
+    reject("registration.max_points_per_voxel", max_points_per_voxel, "in [1, 4]");
+  if (!(scan_spacing_m >= 0.0 && scan_spacing_m <= 1.0))
+    reject("registration.scan_spacing_m", scan_spacing_m, "in [0, 1]");
+  if (!(max_range_m > 0.0 && max_range_m <= 1000.0))
+    reject("registration.max_range_m", max_range_m, "in (0, 1000]");
+  if (!(local_map_radius_m > 0.0 && local_map_radius_m <= 1000.0))
+    reject("registration.local_map_radius_m", local_map_radius_m, "in (0, 1000]");
+  if (max_iterations < 1 || max_iterations > 1000)
+    reject("registration.max_iterations", max_iterations, "in [1, 1000]");
+  if (!(min_threshold_m > 0.0)) reject("registration.min_threshold_m", min_threshold_m, "> 0");
+  if (!(max_threshold_m >= min_threshold_m && max_threshold_m <= 10.0))
+    reject("registration.max_threshold_m", max_threshold_m, "in [min_threshold_m, 10]");
+  if (!(initial_threshold_m >= min_threshold_m && initial_threshold_m <= max_threshold_m))
+    reject("registration.initial_threshold_m", initial_threshold_m,
+           "in [min_threshold_m, max_threshold_m]");
+  if (!(min_inlier_share >= 0.0 && min_inlier_share <= 1.0))
+    reject("registration.min_inlier_share", min_inlier_share, "in [0, 1]");
+  if (min_points < 3) reject("registration.min_points", min_points, ">= 3");
+  if (!(max_correction_m > 0.0)) reject("registration.max_correction_m", max_correction_m, "> 0");
+  if (!(max_correction_rad > 0.0 && max_correction_rad <= 3.2))
+    reject("registration.max_correction_rad", max_correction_rad, "in (0, 3.2]");
+  if (!(degeneracy_ratio >= 0.0 && degeneracy_ratio < 1.0))
+    reject("registration.degeneracy_ratio", degeneracy_ratio, "in [0, 1)");
+  if (explained_min_scans < 1)
+    reject("registration.explained_min_scans", explained_min_scans, ">= 1");
+  if (!(explained_min_span_s >= 0.0 && explained_min_span_s <= 3600.0))
+    reject("registration.explained_min_span_s", explained_min_span_s, "in [0, 3600]");
+  if (!(explained_min_span_in_free_s >= explained_min_span_s &&
+        explained_min_span_in_free_s <= 3600.0))
+    reject("registration.explained_min_span_in_free_s", explained_min_span_in_free_s,
+           "in [explained_min_span_s, 3600]");
+  if (!(explained_max_age_s > 0.0 && explained_max_age_s <= 3600.0))
+    reject("registration.explained_max_age_s", explained_max_age_s, "in (0, 3600]");
+  if (!(range_noise_m > 0.0 && range_noise_m <= 1.0))
+    reject("registration.range_noise_m", range_noise_m, "in (0, 1]");
+  if (!(odometry_noise_m > 0.0)) reject("registration.odometry_noise_m", odometry_noise_m, "> 0");
+  if (!(odometry_noise_rad > 0.0))
+    reject("registration.odometry_noise_rad", odometry_noise_rad, "> 0");
+  if (!(constant_velocity_noise_m > 0.0))
+    reject("registration.constant_velocity_noise_m", constant_velocity_noise_m, "> 0");
+  if (!(constant_velocity_noise_rad > 0.0))
+    reject("registration.constant_velocity_noise_rad", constant_velocity_noise_rad, "> 0");
+  if (!(explained_distance_m > 0.0 && explained_distance_m <= voxel_size_m))
+    reject("registration.explained_distance_m", explained_distance_m, "in (0, voxel_size_m]");
+}
+
+ScanRegistration::ScanRegistration(RegistrationConfig config)
+    : config_((config.validate(), config)) {}
+
+void ScanRegistration::reset() {
+  map_.clear();
+  have_previous_ = false;
+  previous_odometry_.reset();
+  velocity_per_s_ = Pose2{};
+}
+
+ScanRegistration::Key ScanRegistration::key_at(std::int64_t ix, std::int64_t iy) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(ix)) << 32U) |
+         static_cast<std::uint32_t>(iy);
+}
+
+ScanRegistration::Key ScanRegistration::key_of(const Eigen::Vector2d& p) const {
+  return key_at(static_cast<std::int64_t>(std::floor(p.x() / config_.voxel_size_m)),
+                static_cast<std::int64_t>(std::floor(p.y() / config_.voxel_size_m)));
+}
+
+bool ScanRegistration::structure(const Voxel& v) const {
+  return v.scans >= config_.explained_min_scans &&
+         v.last_stamp_s - v.first_stamp_s >= (v.in_free_space ? config_.explained_min_span_in_free_s
+                                                               : config_.explained_min_span_s);
+}
+
+bool ScanRegistration::explained(std::size_t b) const {
+  if (b >= world_points_.size()) return false;
+  const Eigen::Vector2d& p = world_points_[b];
+  if (!std::isfinite(p.x())) return false;
+  const double limit2 = config_.explained_distance_m * config_.explained_distance_m;
+  const auto ix = static_cast<std::int64_t>(std::floor(p.x() / config_.voxel_size_m));
+  const auto iy = static_cast<std::int64_t>(std::floor(p.y() / config_.voxel_size_m));
+  for (std::int64_t x = ix - 1; x <= ix + 1; ++x) {
+    for (std::int64_t y = iy - 1; y <= iy + 1; ++y) {
+      const auto it = map_.find(key_at(x, y));
+      // Structure explains only while it is still seen: someone who stood there and left
+      // explains no one who comes by later.
+      if (it == map_.end() || !structure(it->second) ||
+          last_stamp_s_ - it->second.last_stamp_s > config_.explained_max_age_s) {
+        continue;
+      }
+      for (std::uint8_t i = 0; i < it->second.count; ++i) {
+        if ((it->second.points[i].cast<double>() - p).squaredNorm() <= limit2) return true;
+      }
+    }
+  }
+  return false;
+}
+
+// Beam points in the sensor frame at the scan's stamp: each beam moved back by the sensor's
+// motion between the stamp and its own time (time_increment); normals from the neighbours; the
+// sample for the registration thinned to scan_spacing_m.
+void ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s) {
+  const std::size_t n = scan.size();
+  local_points_.assign(n, Eigen::Vector2d(kNaN, kNaN));
+  normals_.assign(n, Eigen::Vector2d::Zero());
+  sample_.clear();
+  const double ti = scan.time_increment_s;
+  const bool deskew = config_.deskew && std::isfinite(ti) && ti > 0.0 &&
+                      ti * static_cast<double>(n) <= 1.0;
+  for (std::size_t b = 0; b < n; ++b) {
+    if (!scan.is_valid(b)) continue;
+    const double r = scan.ranges_m[b];
+    const double a = scan.bearing_rad(b);
+    Eigen::Vector2d p(r * std::cos(a), r * std::sin(a));
+    if (deskew) p = scaled(motion_per_s, ti * static_cast<double>(b)).apply(p);
+    local_points_[b] = p;
+  }
+  const double spacing2 = config_.scan_spacing_m * config_.scan_spacing_m;
+  const double max_r2 = config_.max_range_m * config_.max_range_m;
+  Eigen::Vector2d last(kNaN, kNaN);
+  for (std::size_t b = 0; b < n; ++b) {
+    const Eigen::Vector2d& p = local_points_[b];
+    if (!std::isfinite(p.x())) continue;
+    // The normal from the neighbours, when they lie on the same surface (within 0.3 m).
+    const Eigen::Vector2d* before = b > 0 && std::isfinite(local_points_[b - 1].x())
+                                        ? &local_points_[b - 1]
+                                        : nullptr;
+    const Eigen::Vector2d* after = b + 1 < n && std::isfinite(local_points_[b + 1].x())
+                                       ? &local_points_[b + 1]
+                                       : nullptr;
+    if (before && (*before - p).squaredNorm() > 0.09) before = nullptr;
+    if (after && (*after - p).squaredNorm() > 0.09) after = nullptr;
+    if (before || after) {
+      const Eigen::Vector2d t = (after ? *after : p) - (before ? *before : p);
+      if (t.squaredNorm() > 1e-12) {
+        Eigen::Vector2d normal = perp(t).normalized();
+        if (normal.dot(p) > 0.0) normal = -normal;  // Facing the sensor.
+        normals_[b] = normal;
+      }
+    }
+    if (p.squaredNorm() > max_r2) continue;
+    if (std::isfinite(last.x()) && (p - last).squaredNorm() < spacing2) continue;
+    sample_.push_back(static_cast<std::int32_t>(b));
+    last = p;
+  }
+}
+
+Pose2 ScanRegistration::register_scan(const LaserScan& scan,
+                                      const std::optional<Pose2>& odometry_pose,
+                                      RegistrationReport& report) {
+  report = RegistrationReport{};
+  ++scan_count_;
+  const double dt = have_previous_ ? scan.stamp_s - previous_stamp_s_ : 0.0;
+  // The seed: the odometry's motion since the previous scan, else constant velocity.
+  Pose2 seed, delta;
+  if (!have_previous_) {
+    seed = odometry_pose.value_or(Pose2{});
+  } else if (odometry_pose && previous_odometry_) {
+    delta = previous_odometry_->inverse() * *odometry_pose;
+    seed = previous_pose_ * delta;
+    report.seeded_by_odometry = true;
+  } else {
+    delta = scaled(velocity_per_s_, dt);
+    seed = previous_pose_ * delta;
+  }
+  const Pose2 motion_per_s =
+      dt > 0.0 ? Pose2{delta.x_m / dt, delta.y_m / dt, delta.yaw_rad / dt} : velocity_per_s_;
+  thin_and_deskew(scan, motion_per_s);
+  report.points = static_cast<std::int32_t>(sample_.size());
+
+  Pose2 pose = seed;
+  const double threshold =
+      model_error_count_ > 0
+          ? std::clamp(3.0 * std::sqrt(model_error_sum_ / static_cast<double>(model_error_count_)),
+                       config_.min_threshold_m, config_.max_threshold_m)
+          : config_.initial_threshold_m;
+  report.threshold_m = threshold;
+  if (have_previous_ && !map_.empty()) {
+    if (report.points < config_.min_points) {
+      report.fallback = true;
+    } else {
+      // Candidates: the points of the voxels around each sample point at the seed, gathered
+      // once (the registration moves a point by less than the threshold).
+      candidate_begin_.assign(sample_.size() + 1, 0);
+      candidate_points_.clear();
+      candidate_normals_.clear();
+      const int reach = static_cast<int>(std::ceil(threshold / config_.voxel_size_m));
+      for (std::size_t i = 0; i < sample_.size(); ++i) {
+        candidate_begin_[i] = static_cast<std::int32_t>(candidate_points_.size());
+        const Eigen::Vector2d q = seed.apply(local_points_[static_cast<std::size_t>(sample_[i])]);
+        const auto ix = static_cast<std::int64_t>(std::floor(q.x() / config_.voxel_size_m));
+        const auto iy = static_cast<std::int64_t>(std::floor(q.y() / config_.voxel_size_m));
+        for (std::int64_t x = ix - reach; x <= ix + reach; ++x) {
+          for (std::int64_t y = iy - reach; y <= iy + reach; ++y) {
+            const auto it = map_.find(key_at(x, y));
+            // Only structure: what has stood for a while, not the trail of someone walking.
+            if (it == map_.end() || !structure(it->second)) continue;
+            for (std::uint8_t j = 0; j < it->second.count; ++j) {
+              candidate_points_.push_back(it->second.points[j].cast<double>());
+              candidate_normals_.push_back(it->second.normals[j].cast<double>());
+            }
+          }
+        }
+      }
+      candidate_begin_[sample_.size()] = static_cast<std::int32_t>(candidate_points_.size());
+
+      const double kappa = threshold / 3.0;
+      const double threshold2 = threshold * threshold;
+      Eigen::Matrix3d h_data = Eigen::Matrix3d::Zero();
+      std::int32_t inliers = 0;
+      double sum_e2 = 0.0;
+      for (int iteration = 0; iteration < config_.max_iterations; ++iteration) {
+        Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d g = Eigen::Vector3d::Zero();
+        inliers = 0;
+        sum_e2 = 0.0;
+        const Eigen::Vector2d c = pose.translation();
+        for (std::size_t i = 0; i < sample_.size(); ++i) {
+          const Eigen::Vector2d q = pose.apply(local_points_[static_cast<std::size_t>(sample_[i])]);
+          double best = threshold2;
+          std::int32_t found = -1;
+          for (std::int32_t j = candidate_begin_[i]; j < candidate_begin_[i + 1]; ++j) {
+            const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
+            if (d2 < best) {
+              best = d2;
+              found = j;
+            }
+          }
+          if (found < 0) continue;
+          ++inliers;
+          const Eigen::Vector2d diff = q - candidate_points_[static_cast<std::size_t>(found)];
+          Eigen::Vector2d normal = candidate_normals_[static_cast<std::size_t>(found)];
+          if (normal.squaredNorm() < 0.25) {  // No normal: point to point along the difference.
+            if (best < 1e-18) continue;
+            normal = diff / std::sqrt(best);
+          }
+          const double e = normal.dot(diff);
+          const Eigen::Vector3d j(normal.x(), normal.y(), normal.dot(perp(q - c)));
+          const double w = kappa * kappa / ((kappa + e * e) * (kappa + e * e));
+          h.noalias() += w * j * j.transpose();
+          g.noalias() += w * e * j;
+          sum_e2 += e * e;
+        }
+        h_data = h;
+        if (inliers < config_.min_points) break;
+        // The residuals count with the range noise (range_noise_m); the seed is a measurement
+        // too: the odometry's motion within its own noise (odometry_noise_m / _rad per scan),
+        // a constant-velocity guess within far wider bounds. It decides the directions the scan
+        // does not constrain (a corridor's length) and holds against a few points that fit.
+        h /= config_.range_noise_m * config_.range_noise_m;
+        g /= config_.range_noise_m * config_.range_noise_m;
+        const double sigma_t = report.seeded_by_odometry
+                                   ? config_.odometry_noise_m
+                                   : config_.constant_velocity_noise_m;
+        const double sigma_r = report.seeded_by_odometry
+                                   ? config_.odometry_noise_rad
+                                   : config_.constant_velocity_noise_rad;
+        const double prior_t = 1.0 / (sigma_t * sigma_t);
+        const double prior_r = 1.0 / (sigma_r * sigma_r);
+        const Eigen::Vector3d off(pose.x_m - seed.x_m, pose.y_m - seed.y_m,
+                                  wrap_angle(pose.yaw_rad - seed.yaw_rad));
+        h(0, 0) += prior_t;
+        h(1, 1) += prior_t;
+        h(2, 2) += prior_r;
+        g += Eigen::Vector3d(prior_t * off.x(), prior_t * off.y(), prior_r * off.z());
+        const Eigen::Vector3d step = -h.ldlt().solve(g);
+        if (!step.allFinite()) break;
+        pose.x_m += step.x();
+        pose.y_m += step.y();
+        pose.yaw_rad = wrap_angle(pose.yaw_rad + step.z());
+        report.iterations = iteration + 1;
+        if (step.head<2>().norm() < 1e-4 && std::abs(step.z()) < 1e-5) break;
+      }
+      const bool enough = inliers >= config_.min_points;
+      report.inlier_share =
+          static_cast<double>(inliers) / static_cast<double>(std::max<std::size_t>(1, sample_.size()));
+      report.residual_m = inliers > 0 ? std::sqrt(sum_e2 / inliers) : 0.0;
+      // Degeneracy: the translation information's eigenvalues (closed form, 2x2 symmetric).
+      const double a = h_data(0, 0), b = h_data(0, 1), d = h_data(1, 1);
+      const double mean = 0.5 * (a + d);
+      const double spread = std::sqrt(0.25 * (a - d) * (a - d) + b * b);
+      report.degeneracy = mean + spread > 0.0 ? std::max(0.0, mean - spread) / (mean + spread) : 0.0;
+      report.correction = seed.inverse() * pose;
+      if (!enough || report.inlier_share < config_.min_inlier_share ||
+          report.correction.translation().norm() > config_.max_correction_m ||
+          std::abs(report.correction.yaw_rad) > config_.max_correction_rad ||
+          !std::isfinite(pose.x_m + pose.y_m + pose.yaw_rad)) {
+        report.fallback = true;
+        pose = seed;
+        report.correction = Pose2{};
+      } else {
+        report.registered = true;
+        report.degenerate = report.degeneracy < config_.degeneracy_ratio;
+        if (delta.translation().norm() > kMinMotionForThreshold_m ||
+            std::abs(delta.yaw_rad) > kMinMotionForThreshold_m / kThresholdRange_m) {
+          const double error = report.correction.translation().norm() +
+                               2.0 * kThresholdRange_m * std::sin(0.5 * std::abs(report.correction.yaw_rad));
+          model_error_sum_ += error * error;
+          ++model_error_count_;
+        }
+      }
+    }
+  }
+  if (have_previous_ && dt > 0.0) {
+    const Pose2 moved = previous_pose_.inverse() * pose;
+    velocity_per_s_ = {moved.x_m / dt, moved.y_m / dt, moved.yaw_rad / dt};
+  }
+  previous_pose_ = pose;
+  previous_stamp_s_ = scan.stamp_s;
+  previous_odometry_ = odometry_pose;
+  have_previous_ = true;
+  last_pose_ = pose;
+  last_stamp_s_ = scan.stamp_s;
+  world_points_.resize(local_points_.size());
+  for (std::size_t b = 0; b < local_points_.size(); ++b) {
+    world_points_[b] = std::isfinite(local_points_[b].x()) ? pose.apply(local_points_[b])
+                                                           : Eigen::Vector2d(kNaN, kNaN);
+  }
+  return pose;
+}
+
+void ScanRegistration::add(const std::vector<char>& keep,
+                           const std::vector<char>& appeared_in_free_space) {
+  const double max_r2 = config_.max_range_m * config_.max_range_m;
+  const double c = std::cos(last_pose_.yaw_rad), s = std::sin(last_pose_.yaw_rad);
+  for (std::size_t b = 0; b < world_points_.size() && b < keep.size(); ++b) {
+    if (keep[b] == 0 || !std::isfinite(world_points_[b].x())) continue;
+    if (local_points_[b].squaredNorm() > max_r2) continue;
+    Voxel& v = map_[key_of(world_points_[b])];
+    if (v.last_scan != scan_count_) {
+      if (v.scans == 0) {
+        v.first_stamp_s = last_stamp_s_;
+        v.in_free_space = b < appeared_in_free_space.size() && appeared_in_free_space[b] != 0;
+      }
+      ++v.scans;
+      v.last_scan = scan_count_;
+      v.last_stamp_s = last_stamp_s_;
+    }
+    if (v.count < config_.max_points_per_voxel) {
+      const Eigen::Vector2d& n = normals_[b];
+      v.points[v.count] = world_points_[b].cast<float>();
+      v.normals[v.count] = Eigen::Vector2d(c * n.x() - s * n.y(), s * n.x() + c * n.y()).cast<float>();
+      ++v.count;
+    }
+  }
+  // Every tenth scan: forget what lies beyond the local map and the trails of passers-by.
+  if (scan_count_ % 10 != 0) return;
+  const double radius2 = config_.local_map_radius_m * config_.local_map_radius_m;
+  const Eigen::Vector2d center = last_pose_.translation();
+  for (auto it = map_.begin(); it != map_.end();) {
+    const Voxel& v = it->second;
+    const bool far = (v.points[0].cast<double>() - center).squaredNorm() > radius2;
+    const bool transient = v.scans < config_.explained_min_scans &&
+                           last_stamp_s_ - v.last_stamp_s > kTransientMemory_s;
+    it = far || transient ? map_.erase(it) : std::next(it);
+  }
+}
+
+}  // namespace dispel

@@ -1,0 +1,121 @@
+#!/usr/bin/env python3
+"""The filter on a real recording without the simulator's ground truth: what `dispel filter`
+removed, against people annotations or against the recording's persistent background.
+
+usage: /usr/bin/python3 tools/recording_eval.py FILTERED.bag --scan-topic TOPIC
+           [--people TOPIC] [--person-radius M] [--json]
+
+FILTERED.bag is `dispel filter`'s output (it has TOPIC_labels, and TOPIC_pose when the
+registration is on). Beams labelled invalid (4) are not counted.
+
+--people TOPIC: person annotations as in angusleigh/leg_tracker_benchmarks (leg_tracker/Person
+  messages without a header, positions in the laser frame, each belonging to the latest scan
+  before it in bag time). A person's beams end within --person-radius (default 0.4 m) of the
+  annotation; background beams end farther than 1 m from every person of the scan. Prints the
+  share of person beams removed and of background beams kept.
+Without --people: background beams end in a 0.1 m cell of the registered frame (TOPIC_pose)
+  that beams of at least 20 scans hit, the first and the last at least 10 s apart: structure that
+  persisted. Prints the share of all valid beams removed and of background beams kept."""
+import json, math, sys
+import rosbag
+
+REMOVED = (1, 2)
+INVALID = 4
+
+def main():
+    args = sys.argv[1:]
+    if not args or '--scan-topic' not in args:
+        sys.exit(__doc__)
+    path = args[0]
+    topic = args[args.index('--scan-topic') + 1]
+    people_topic = args[args.index('--people') + 1] if '--people' in args else None
+    radius = float(args[args.index('--person-radius') + 1]) if '--person-radius' in args else 0.4
+    bag = rosbag.Bag(path)
+    topics = bag.get_type_and_topic_info().topics
+    if topic + '_labels' not in topics:
+        sys.exit('%s: no %s_labels (filter the recording with dispel filter first)' % (path, topic))
+    result = {'recording': path, 'scan_topic': topic}
+    if people_topic:
+        result.update(annotated(bag, topic, people_topic, radius))
+    else:
+        if topic + '_pose' not in topics:
+            sys.exit('%s: no %s_pose (the background needs the registered poses)' % (path, topic))
+        result.update(background(bag, topic))
+    if '--json' in args:
+        print(json.dumps(result, indent=2))
+    else:
+        for k, v in result.items():
+            print('%-28s %s' % (k, '%.4f' % v if isinstance(v, float) else v))
+
+def beam_points(scan):
+    for i, r in enumerate(scan.ranges):
+        a = scan.angle_min + i * scan.angle_increment
+        yield i, r, r * math.cos(a), r * math.sin(a)
+
+def annotated(bag, topic, people_topic, radius):
+    scans = []  # [labels message, [(x, y), ...]]
+    for t, m, _ in bag.read_messages(topics=[topic + '_labels', people_topic]):
+        if t == topic + '_labels':
+            scans.append([m, []])
+        elif scans:
+            scans[-1][1].append((m.pose.position.x, m.pose.position.y))
+    person = person_removed = background = background_kept = 0
+    annotated_scans = 0
+    for labels, people in scans:
+        if not people:
+            continue
+        annotated_scans += 1
+        for i, r, x, y in beam_points(labels):
+            label = int(labels.intensities[i])
+            if label == INVALID:
+                continue
+            d = min(math.hypot(x - px, y - py) for px, py in people)
+            if d <= radius:
+                person += 1
+                person_removed += label in REMOVED
+            elif d > 1.0:
+                background += 1
+                background_kept += label not in REMOVED
+    return {'scans': len(scans), 'annotated_scans': annotated_scans,
+            'person_beams': person, 'person_beams_removed': person_removed / max(1, person),
+            'background_beams': background,
+            'background_kept': background_kept / max(1, background)}
+
+def background(bag, topic, cell=0.1, min_scans=20, min_span_s=10.0):
+    poses = {}
+    # A pose is written with its scan's labels, at the same bag time.
+    for _, m, t in bag.read_messages(topics=[topic + '_pose']):
+        q = m.pose.pose.orientation
+        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        poses[t.to_nsec()] = (m.pose.pose.position.x, m.pose.pose.position.y, yaw)
+    cells = {}  # cell -> [scans, first stamp, last stamp, last scan]
+    beams = []  # (cell, removed)
+    valid = removed = 0
+    for n, (_, m, t) in enumerate(bag.read_messages(topics=[topic + '_labels'])):
+        pose = poses.get(t.to_nsec())
+        stamp = m.header.stamp.to_sec()
+        for i, r, x, y in beam_points(m):
+            label = int(m.intensities[i])
+            if label == INVALID:
+                continue
+            valid += 1
+            removed += label in REMOVED
+            if pose is None:
+                continue
+            c, s = math.cos(pose[2]), math.sin(pose[2])
+            key = (math.floor((pose[0] + c * x - s * y) / cell),
+                   math.floor((pose[1] + s * x + c * y) / cell))
+            e = cells.setdefault(key, [0, stamp, stamp, -1])
+            if e[3] != n:
+                e[0] += 1
+                e[3] = n
+            e[2] = stamp
+            beams.append((key, label in REMOVED))
+    persistent = [rem for key, rem in beams
+                  if cells[key][0] >= min_scans and cells[key][2] - cells[key][1] >= min_span_s]
+    return {'valid_beams': valid, 'removed_share': removed / max(1, valid),
+            'background_beams': len(persistent),
+            'background_kept': 1.0 - sum(persistent) / max(1, len(persistent))}
+
+if __name__ == '__main__':
+    main()

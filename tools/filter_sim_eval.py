@@ -3,12 +3,12 @@
 README's "Results on the simulated thesis hall" and docs/simulator.md.
 
 usage: filter_sim_eval.py DISPEL SCENARIO.yaml CONFIG.yaml [--seeds N] [--set section.key=value ...]
-                          [--scenario-set section.key=value ...]
+                          [--scenario-set section.key=value ...] [--scale-to-scanner]
 
 For each seed 1..N (default 5): dispel sim -> dispel filter --config -> dispel eval --json. --set
 changes one key of the configuration, e.g. --set classification.presumption=guilt
 --set tracking.matching=nearest_neighbour; --scenario-set changes one of the scenario, e.g.
---scenario-set robot.speed_mps=1.5. Prints mean preservation and rejection and the median
+--scenario-set robot.speed_mps=1.5; --scale-to-scanner is passed to dispel filter. Prints mean preservation and rejection and the median
 over seeds of each run's median detection latency."""
 import json, os, re, statistics, subprocess, sys, tempfile
 
@@ -36,6 +36,7 @@ def main():
     seeds = int(args[args.index('--seeds') + 1]) if '--seeds' in args else 5
     settings = [args[i + 1] for i, a in enumerate(args) if a == '--set']
     scenario_settings = [args[i + 1] for i, a in enumerate(args) if a == '--scenario-set']
+    filter_args = ['--scale-to-scanner'] if '--scale-to-scanner' in args else []
     text = set_keys(open(config).read(), settings)
     scenario_text = set_keys(open(scenario).read(), scenario_settings)
     runs = []
@@ -49,7 +50,8 @@ def main():
             subprocess.run([dispel, 'sim', scenario, '-o', sim, '--seed', str(seed)], check=True,
                            stdout=subprocess.DEVNULL)
             stats = os.path.join(tmp, 'stats.json')
-            subprocess.run([dispel, 'filter', sim, '-o', out, '--config', cfg, '--stats', stats],
+            subprocess.run([dispel, 'filter', sim, '-o', out, '--config', cfg, '--stats', stats] +
+                           filter_args,
                            check=True, stdout=subprocess.DEVNULL)
             used = json.load(open(stats))['config']
             for s in settings:  # What the filter reports it used is what was asked for.
@@ -68,7 +70,8 @@ def main():
     print('%s, %s%s, seeds 1-%d: preservation %.4f, rejection %.4f, latency %s' % (
         os.path.basename(scenario), os.path.basename(config),
         ''.join(' --set ' + s for s in settings) +
-        ''.join(' --scenario-set ' + s for s in scenario_settings), seeds, mean('preservation_rate'),
+        ''.join(' --scenario-set ' + s for s in scenario_settings) +
+        (' --scale-to-scanner' if filter_args else ''), seeds, mean('preservation_rate'),
         mean('rejection_rate'), '%.2f s' % statistics.median(latencies) if latencies else '-'))
     for seed, r in enumerate(runs, 1):
         lat = r['detection_latency_s']['median']

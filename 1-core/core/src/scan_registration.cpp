@@ -121,8 +121,14 @@ bool ScanRegistration::explained(std::size_t b) const {
           last_stamp_s_ - it->second.last_stamp_s > config_.explained_max_age_s) {
         continue;
       }
-      for (std::uint8_t i = 0; i < it->second.count; ++i) {
-        if ((it->second.points[i].cast<double>() - p).squaredNorm() <= limit2) return true;
+      const Voxel& v = it->second;
+      const double min_age =
+          v.in_free_space ? config_.explained_min_span_in_free_s : config_.explained_min_span_s;
+      for (std::uint8_t i = 0; i < v.count; ++i) {
+        if (last_stamp_s_ - v.stamps_s[i] >= min_age &&
+            (v.points[i].cast<double>() - p).squaredNorm() <= limit2) {
+          return true;
+        }
       }
     }
   }
@@ -372,6 +378,7 @@ void ScanRegistration::add(const std::vector<char>& keep,
     if (v.count < config_.max_points_per_voxel) {
       const Eigen::Vector2d& n = normals_[b];
       v.points[v.count] = world_points_[b].cast<float>();
+      v.stamps_s[v.count] = last_stamp_s_;
       v.normals[v.count] = Eigen::Vector2d(c * n.x() - s * n.y(), s * n.x() + c * n.y()).cast<float>();
       ++v.count;
     }

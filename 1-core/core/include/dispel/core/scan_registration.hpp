@@ -51,9 +51,11 @@ struct RegistrationConfig {
   /// translation information is below this share of the strongest; along that direction the seed
   /// holds (the seed's noise keeps it).
   double degeneracy_ratio = 0.02;
-  /// Structure, the only part of the map scans register to and the part that explains points:
-  /// voxels hit in at least explained_min_scans scans spread over at
-  /// least explained_min_span_s, a point within explained_distance_m of one of their points.
+  /// Structure, the only part of the map scans register to: voxels hit in at least
+  /// explained_min_scans scans spread over at least explained_min_span_s. A point is explained
+  /// when it lies within explained_distance_m of a point of structure that was added at least
+  /// explained_min_span_s before (so that a walker's own trail, always younger than the time
+  /// the walker takes to pass, never explains the walker).
   int explained_min_scans = 4;
   double explained_min_span_s = 0.6;
   double explained_min_span_in_free_s = 5.0;
@@ -120,6 +122,7 @@ class ScanRegistration {
   struct Voxel {
     std::array<Eigen::Vector2f, 4> points;
     std::array<Eigen::Vector2f, 4> normals;
+    std::array<double, 4> stamps_s;  // When each point was added.
     std::uint8_t count = 0;
     std::int32_t scans = 0;        // Scans that hit it.
     bool in_free_space = false;    // First hit where the scanner had seen through.

@@ -288,11 +288,13 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
         // does not constrain (a corridor's length) and holds against a few points that fit.
         h /= config_.range_noise_m * config_.range_noise_m;
         g /= config_.range_noise_m * config_.range_noise_m;
+        // The odometry's noise grows with the motion (5 % of it, and 0.01 rad per metre).
+        const double moved = delta.translation().norm(), turned = std::abs(delta.yaw_rad);
         const double sigma_t = report.seeded_by_odometry
-                                   ? config_.odometry_noise_m
+                                   ? config_.odometry_noise_m + 0.05 * moved
                                    : config_.constant_velocity_noise_m;
         const double sigma_r = report.seeded_by_odometry
-                                   ? config_.odometry_noise_rad
+                                   ? config_.odometry_noise_rad + 0.05 * turned + 0.01 * moved
                                    : config_.constant_velocity_noise_rad;
         const double prior_t = 1.0 / (sigma_t * sigma_t);
         const double prior_r = 1.0 / (sigma_r * sigma_r);

@@ -40,11 +40,12 @@ struct RegistrationConfig {
   int min_points = 20;
   double max_correction_m = 0.5;
   double max_correction_rad = 0.35;
-  /// The noise of a return (m) and of the seed's motion per scan: the odometry's, and a
-  /// constant-velocity guess's (no odometry). The seed counts against the points with these.
+  /// The noise of a return (m) and of the seed's motion per scan: the odometry's (these plus 5 %
+  /// of the motion and 0.01 rad per metre), and a constant-velocity guess's (no odometry). The
+  /// seed counts against the points with these.
   double range_noise_m = 0.03;
-  double odometry_noise_m = 0.02;
-  double odometry_noise_rad = 0.01;
+  double odometry_noise_m = 0.005;
+  double odometry_noise_rad = 0.002;
   double constant_velocity_noise_m = 0.2;
   double constant_velocity_noise_rad = 0.1;
   /// A scan is degenerate (a corridor with nothing ahead) when the weakest direction of its

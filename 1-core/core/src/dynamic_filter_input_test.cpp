@@ -124,11 +124,13 @@ TEST(DynamicFilterInput, NonFinitePoseAndBadScansPassThroughUnchanged) {
   EXPECT_EQ(filter.process(f.scan, f.pose).event, FilterEvent::kFiltered);
 }
 
-TEST(DynamicFilterInput, AScanWithoutAPoseIsPassedThroughAndTheTracksWaitForTheNext) {
+TEST(DynamicFilterInput, WithoutRegistrationAScanWithoutAPoseIsPassedThroughAndTracksWait) {
   Scenario s;
   s.walls = room(6.0, 5.0);
   s.movers = {walker({3.0, -3.0}, {0.0, 1.0})};
-  DynamicFilter filter{DynamicFilterConfig{}};
+  DynamicFilterConfig config;
+  config.registration.enabled = false;
+  DynamicFilter filter{config};
   run(s, filter, 20);
   const std::size_t tracks = filter.track_count();
   const Frame f = render(s, 20 * kPeriod);
@@ -144,6 +146,41 @@ TEST(DynamicFilterInput, AScanWithoutAPoseIsPassedThroughAndTheTracksWaitForTheN
   EXPECT_STREQ(filter_event_name(FilterEvent::kNoPose), "no_pose");
   const Frame next = render(s, 21 * kPeriod);
   EXPECT_EQ(filter.process(next.scan, next.pose).event, FilterEvent::kFiltered);
+}
+
+// With the registration (dispel's default) a scan without a pose is registered with a
+// constant-velocity guess: laser-only. A robot driving through a room with a walker: every scan is
+// filtered, the registered poses follow the true ones, the walker is removed and the walls kept.
+TEST(DynamicFilterInput, WithRegistrationScansWithoutPosesAreRegisteredAndFiltered) {
+  Scenario s;
+  s.walls = room(8.0, 6.0);
+  s.pillars = {{{1.5, 1.5}, 0.15}, {{-2.0, -1.0}, 0.2}, {{2.5, -2.0}, 0.1}};
+  s.movers = {walker({2.0, -2.5}, {0.0, 1.0})};
+  s.sensor = [](double t) { return Pose2{-2.0 + 0.5 * t, 0.3 * std::sin(0.5 * t), 0.1 * t}; };
+  DynamicFilter filter{DynamicFilterConfig{}};
+  std::vector<ScanStats> st;
+  double worst_m = 0.0;
+  const Pose2 start = s.sensor(0.0);
+  for (int k = 0; k < 100; ++k) {
+    const Frame f = render(s, k * kPeriod);
+    const FilterResult r = filter.process(f.scan, std::nullopt);
+    ASSERT_NE(r.event, FilterEvent::kNoPose) << "scan " << k;
+    ASSERT_TRUE(r.sensor_pose.has_value());
+    // The registration's frame is the first scan's sensor frame.
+    const Pose2 truth = start.inverse() * f.pose;
+    worst_m = std::max(worst_m, (r.sensor_pose->translation() - truth.translation()).norm());
+    st.push_back(stats_of(f, r));
+  }
+  EXPECT_LT(worst_m, 0.05) << "registered pose off the truth";
+  EXPECT_EQ(filter.counters().scans_without_odometry, 100);
+  EXPECT_GE(filter.counters().scans_registered, 90);
+  std::int64_t static_beams = 0;
+  for (const ScanStats& one : st) {
+    const auto b = one.beams.find(0);
+    static_beams += b == one.beams.end() ? 0 : b->second;
+  }
+  EXPECT_LE(static_cast<double>(static_removed(st)), 0.002 * static_cast<double>(static_beams));
+  EXPECT_GE(scans_until_removed(st, 1), 0);
 }
 
 TEST(DynamicFilterInput, NanRangesGiveValidLabels) {

@@ -184,6 +184,35 @@ void ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motio
   }
 }
 
+// The points of the voxels around each sample point (at @p pose), structure only or all; returns
+// how many sample points have a candidate.
+std::int32_t ScanRegistration::gather_candidates(const Pose2& pose, int reach,
+                                                 bool structure_only) {
+  candidate_begin_.assign(sample_.size() + 1, 0);
+  candidate_points_.clear();
+  candidate_normals_.clear();
+  std::int32_t covered = 0;
+  for (std::size_t i = 0; i < sample_.size(); ++i) {
+    candidate_begin_[i] = static_cast<std::int32_t>(candidate_points_.size());
+    const Eigen::Vector2d q = pose.apply(local_points_[static_cast<std::size_t>(sample_[i])]);
+    const auto ix = static_cast<std::int64_t>(std::floor(q.x() / config_.voxel_size_m));
+    const auto iy = static_cast<std::int64_t>(std::floor(q.y() / config_.voxel_size_m));
+    for (std::int64_t x = ix - reach; x <= ix + reach; ++x) {
+      for (std::int64_t y = iy - reach; y <= iy + reach; ++y) {
+        const auto it = map_.find(key_at(x, y));
+        if (it == map_.end() || (structure_only && !structure(it->second))) continue;
+        for (std::uint8_t j = 0; j < it->second.count; ++j) {
+          candidate_points_.push_back(it->second.points[j].cast<double>());
+          candidate_normals_.push_back(it->second.normals[j].cast<double>());
+        }
+      }
+    }
+    if (static_cast<std::int32_t>(candidate_points_.size()) > candidate_begin_[i]) ++covered;
+  }
+  candidate_begin_[sample_.size()] = static_cast<std::int32_t>(candidate_points_.size());
+  return covered;
+}
+
 Pose2 ScanRegistration::register_scan(const LaserScan& scan,
                                       const std::optional<Pose2>& odometry_pose,
                                       RegistrationReport& report) {
@@ -220,28 +249,12 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
     } else {
       // Candidates: the points of the voxels around each sample point at the seed, gathered
       // once (the registration moves a point by less than the threshold).
-      candidate_begin_.assign(sample_.size() + 1, 0);
-      candidate_points_.clear();
-      candidate_normals_.clear();
+      // A young map (the first scans, or a scene that has just changed) has no structure yet:
+      // then every voxel is a candidate.
       const int reach = static_cast<int>(std::ceil(threshold / config_.voxel_size_m));
-      for (std::size_t i = 0; i < sample_.size(); ++i) {
-        candidate_begin_[i] = static_cast<std::int32_t>(candidate_points_.size());
-        const Eigen::Vector2d q = seed.apply(local_points_[static_cast<std::size_t>(sample_[i])]);
-        const auto ix = static_cast<std::int64_t>(std::floor(q.x() / config_.voxel_size_m));
-        const auto iy = static_cast<std::int64_t>(std::floor(q.y() / config_.voxel_size_m));
-        for (std::int64_t x = ix - reach; x <= ix + reach; ++x) {
-          for (std::int64_t y = iy - reach; y <= iy + reach; ++y) {
-            const auto it = map_.find(key_at(x, y));
-            // Only structure: what has stood for a while, not the trail of someone walking.
-            if (it == map_.end() || !structure(it->second)) continue;
-            for (std::uint8_t j = 0; j < it->second.count; ++j) {
-              candidate_points_.push_back(it->second.points[j].cast<double>());
-              candidate_normals_.push_back(it->second.normals[j].cast<double>());
-            }
-          }
-        }
+      if (gather_candidates(seed, reach, true) < config_.min_points) {
+        gather_candidates(seed, reach, false);
       }
-      candidate_begin_[sample_.size()] = static_cast<std::int32_t>(candidate_points_.size());
 
       const double kappa = threshold / 3.0;
       const double threshold2 = threshold * threshold;

@@ -49,7 +49,10 @@ TEST(ScanFilterRunner, LabelsEqualTheFilterFedDirectly) {
 }
 
 TEST(ScanFilterRunner, ScanWithoutPoseIsPassedThroughAndCounted) {
-  ScanFilterRunner runner({});
+  // Without the registration (with it, a scan without a pose is registered: laser-only).
+  ScanFilterRunnerOptions options;
+  options.config.registration.enabled = false;
+  ScanFilterRunner runner(options);
   const LaserScan scan = scene(0, 0.05);
   const FilterResult& r = runner.process(scan, 0.0, std::nullopt);
   EXPECT_EQ(r.event, FilterEvent::kNoPose);
@@ -103,7 +106,10 @@ TEST(ScanFilterRunner, ScalesToTheStatedPeriodOrWaitsForTheStamps) {
 }
 
 TEST(ScanFilterRunner, OutcomesCountEachWayAScanIsPassedThrough) {
-  ScanFilterRunner runner({});
+  // Without the registration (with it, a scan without a pose is registered: laser-only).
+  ScanFilterRunnerOptions options;
+  options.config.registration.enabled = false;
+  ScanFilterRunner runner(options);
   LaserScan bad = scene(0, 0.05);
   bad.angle_increment_rad = 0.0;
   runner.process(bad, 0.0, Pose2{});

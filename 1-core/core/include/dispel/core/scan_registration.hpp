@@ -52,7 +52,8 @@ struct RegistrationConfig {
   /// translation information is below this share of the strongest; along that direction the seed
   /// holds (the seed's noise keeps it).
   double degeneracy_ratio = 0.02;
-  /// Structure, the only part of the map scans register to: voxels hit in at least
+  /// Structure, the part of the map scans register to (every voxel while there is too little of it:
+  /// a young map): voxels hit in at least
   /// explained_min_scans scans spread over at least explained_min_span_s. A point is explained
   /// when it lies within explained_distance_m of a point of structure that was added at least
   /// explained_min_span_s before (so that a walker's own trail, always younger than the time
@@ -135,6 +136,7 @@ class ScanRegistration {
   static Key key_at(std::int64_t ix, std::int64_t iy);
   Key key_of(const Eigen::Vector2d& p) const;
   bool structure(const Voxel& v) const;
+  std::int32_t gather_candidates(const Pose2& pose, int reach, bool structure_only);
   void thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s);
 
   RegistrationConfig config_;

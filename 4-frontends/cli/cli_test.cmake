@@ -72,7 +72,10 @@ expect_filter_error("No such file" ${WORK_DIR}/missing.bag --static-sensor)
 expect_filter_error("not a readable ROS 1 bag" ${WORK_DIR}/not_a_bag.bag --static-sensor)
 expect_filter_error("truncated.bag" ${WORK_DIR}/truncated.bag --static-sensor)
 expect_filter_error("no sensor_msgs/LaserScan topic /front" ${BAG} --static-sensor --scan-topic /front)
-expect_filter_error("no nav_msgs/Odometry topic /odom" ${BAG})
+expect_filter_error("no nav_msgs/Odometry topic /odom" ${BAG}
+                    --config ${SOURCE_DIR}/config/thesis.yaml)
+expect_filter_error("--odom-topic none needs the scan registration" ${BAG} --odom-topic none
+                    --config ${SOURCE_DIR}/config/thesis.yaml)
 expect_filter_error("unknown key 'segmentation.cluster_gapm'" ${BAG} --static-sensor
                     --config ${WORK_DIR}/unknown_key.yaml)
 expect_filter_error("segmentation.cluster_gap_m must be" ${BAG} --static-sensor

@@ -160,19 +160,26 @@ void ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motio
   for (std::size_t b = 0; b < n; ++b) {
     const Eigen::Vector2d& p = local_points_[b];
     if (!std::isfinite(p.x())) continue;
-    // The normal from the neighbours, when they lie on the same surface (within 0.3 m).
-    const Eigen::Vector2d* before = b > 0 && std::isfinite(local_points_[b - 1].x())
-                                        ? &local_points_[b - 1]
-                                        : nullptr;
-    const Eigen::Vector2d* after = b + 1 < n && std::isfinite(local_points_[b + 1].x())
-                                       ? &local_points_[b + 1]
-                                       : nullptr;
-    if (before && (*before - p).squaredNorm() > 0.09) before = nullptr;
-    if (after && (*after - p).squaredNorm() > 0.09) after = nullptr;
-    if (before || after) {
-      const Eigen::Vector2d t = (after ? *after : p) - (before ? *before : p);
-      if (t.squaredNorm() > 1e-12) {
-        Eigen::Vector2d normal = perp(t).normalized();
+    // The normal: the direction of least spread of the neighbouring beams' points on the same
+    // surface (within 0.3 m, up to 4 beams either side), when there are at least 3 of them.
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    int count = 0;
+    const std::size_t lo = b >= 4 ? b - 4 : 0, hi = std::min(n - 1, b + 4);
+    for (std::size_t j = lo; j <= hi; ++j) {
+      const Eigen::Vector2d& q = local_points_[j];
+      if (!std::isfinite(q.x()) || (q - p).squaredNorm() > 0.09) continue;
+      mean += q;
+      cov += q * q.transpose();
+      ++count;
+    }
+    if (count >= 3) {
+      mean /= count;
+      cov = cov / count - mean * mean.transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+      Eigen::Vector2d normal = eig.eigenvectors().col(0);
+      // A line, not a blob: the spread across it well below the spread along it.
+      if (eig.eigenvalues()(0) < 0.1 * eig.eigenvalues()(1)) {
         if (normal.dot(p) > 0.0) normal = -normal;  // Facing the sensor.
         normals_[b] = normal;
       }

@@ -140,6 +140,112 @@ TEST(Simulator, RobotFollowsTheLawnmowerAndOdometryDriftsFromTheTruth) {
   EXPECT_LT(drift, 2.0);    // ...but odometry stays usable.
 }
 
+// A real scanner measures its beams over the sweep: with sweep on, beam i is measured
+// i * time_increment after the stamp, from where the turning robot is then.
+TEST(Simulator, BeamsAreMeasuredOverTheSweepWhileTheRobotTurns) {
+  Scenario s = room_with_walker();
+  s.actors.clear();
+  s.duration_s = 3.0;
+  s.robot.speed_mps = 0.5;
+  s.robot.waypoints = {{0.0, 3.0}, {0.0, -3.0}};  // A sharp turn toward the first waypoint.
+  s.lidar.rate_hz = 10.0;
+  s.lidar.resolution_deg = 0.5;
+  const SimulationOutput at_once = simulate(s, 1);
+  s.lidar.sweep = true;
+  const SimulationOutput swept = simulate(s, 1);
+  ASSERT_EQ(at_once.scans.size(), swept.scans.size());
+  EXPECT_EQ(at_once.scans[5].scan.time_increment_s, 0.0);
+  EXPECT_NEAR(swept.scans[5].scan.time_increment_s, 0.5 / (360.0 * 10.0), 1e-12);
+  // The first beams are measured at the stamp and agree; the last ones, 75 ms later in a turn,
+  // do not.
+  int first_differ = 0, last_differ = 0;
+  for (std::size_t k = 1; k < swept.scans.size(); ++k) {
+    const auto& a = at_once.scans[k].scan.ranges_m;
+    const auto& b = swept.scans[k].scan.ranges_m;
+    for (std::size_t i = 0; i < 8; ++i) first_differ += std::abs(a[i] - b[i]) > 0.02F;
+    for (std::size_t i = a.size() - 8; i < a.size(); ++i) last_differ += std::abs(a[i] - b[i]) > 0.02F;
+  }
+  EXPECT_EQ(first_differ, 0);
+  EXPECT_GT(last_differ, 20);
+}
+
+// Rough walls: a wall becomes pieces set back and forth, doors, glass gaps and furniture legs,
+// drawn from the seed; the same seed gives the same building, every return stays static.
+TEST(Simulator, RoughWallsHaveRecessesGapsAndLegsAndStayStatic) {
+  Scenario s = room_with_walker();
+  s.actors.clear();
+  s.duration_s = 0.5;
+  s.world.walls = {{{-10, -3}, {10, -3}}, {{-10, 3}, {10, 3}}};
+  const SimulationOutput smooth = simulate(s, 4);
+  s.world.rough_walls = RoughWalls{};
+  s.world.rough_walls->glass_share = 0.3;
+  const SimulationOutput rough = simulate(s, 4);
+  const SimulationOutput again = simulate(s, 4);
+  const SimulationOutput other = simulate(s, 5);
+  EXPECT_EQ(rough.scans[0].scan.ranges_m, again.scans[0].scan.ranges_m);
+  EXPECT_NE(rough.scans[0].scan.ranges_m, other.scans[0].scan.ranges_m);
+  // The smooth walls are lines at |y| = 3; the rough ones are not, and their glass lets beams out.
+  const Pose2 laser = rough.scans[0].base_pose * s.robot.laser_mount;
+  int off_line = 0, no_return = 0, smooth_no_return = 0;
+  for (std::size_t i = 0; i < rough.scans[0].scan.size(); ++i) {
+    const ScanFrame& f = rough.scans[0];
+    smooth_no_return += smooth.scans[0].truth[i] == Truth::kNoReturn;
+    if (f.truth[i] == Truth::kNoReturn) {
+      ++no_return;
+      continue;
+    }
+    EXPECT_EQ(f.truth[i], Truth::kStatic);
+    const Eigen::Vector2d p = beam_point(f, laser, i);
+    off_line += std::abs(std::abs(p.y()) - 3.0) > 0.02 && std::abs(p.x()) < 9.0;
+  }
+  EXPECT_GT(off_line, 50);
+  EXPECT_GT(no_return, smooth_no_return + 20);
+}
+
+// Range noise that grows with range, and mixed pixels at depth edges.
+TEST(Simulator, NoiseGrowsWithRangeAndMixedPixelsFallBetweenSurfaces) {
+  Scenario s = room_with_walker();
+  s.actors.clear();
+  s.duration_s = 5.0;
+  s.world.circles = {{{2.0, 0.0}, 0.3}};  // A pillar 2 m ahead, the wall 5 m behind it.
+  s.lidar.range_noise_m = 0.001;
+  s.lidar.range_noise_per_m = 0.01;
+  s.lidar.mixed_pixels = 1.0;
+  const SimulationOutput out = simulate(s, 2);
+  Scenario ideal = s;
+  ideal.lidar.range_noise_m = 0.0;
+  ideal.lidar.range_noise_per_m = 0.0;
+  ideal.lidar.mixed_pixels = 0.0;
+  const SimulationOutput truth = simulate(ideal, 2);
+  double near_sum = 0.0, far_sum = 0.0;
+  int near_n = 0, far_n = 0, between = 0;
+  for (std::size_t k = 0; k < out.scans.size(); ++k) {
+    const auto& r = out.scans[k].scan.ranges_m;
+    const auto& t = truth.scans[k].scan.ranges_m;
+    for (std::size_t i = 1; i + 1 < r.size(); ++i) {
+      if (!std::isfinite(r[i]) || !std::isfinite(t[i])) continue;
+      const bool edge = std::abs(t[i - 1] - t[i]) > 0.5F || std::abs(t[i + 1] - t[i]) > 0.5F;
+      if (edge) {
+        between += r[i] > std::min(t[i - 1], t[i + 1]) + 0.2F &&
+                   r[i] < std::max(t[i - 1], t[i + 1]) - 0.2F;
+        continue;
+      }
+      const double e = (r[i] - t[i]) * (r[i] - t[i]);
+      if (t[i] < 2.0F) {
+        near_sum += e;
+        ++near_n;
+      } else if (t[i] > 4.5F) {
+        far_sum += e;
+        ++far_n;
+      }
+    }
+  }
+  ASSERT_GT(near_n, 100);
+  ASSERT_GT(far_n, 100);
+  EXPECT_GT(std::sqrt(far_sum / far_n), 2.0 * std::sqrt(near_sum / near_n));
+  EXPECT_GT(between, 20);
+}
+
 TEST(Scenario, BadValuesAreRejectedByName) {
   Scenario s;
   s.lidar.resolution_deg = 0.0;
@@ -152,6 +258,31 @@ TEST(Scenario, BadValuesAreRejectedByName) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("actors[0]"), std::string::npos);
   }
+  const auto expect_named = [](const Scenario& bad, const std::string& field) {
+    try {
+      bad.validate();
+      ADD_FAILURE() << field;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  s = Scenario{};
+  s.world.rough_walls = RoughWalls{};
+  s.world.rough_walls->piece_min_m = 0.0;
+  expect_named(s, "world.rough_walls.piece_min_m");
+  s.world.rough_walls = RoughWalls{};
+  s.world.rough_walls->glass_share = std::nan("");
+  expect_named(s, "world.rough_walls.glass_share");
+  s = Scenario{};
+  s.world.shelves = {ShelfRow{}};
+  s.world.shelves[0].bay_m = 0.0;
+  expect_named(s, "world.shelves[0].bay_m");
+  s = Scenario{};
+  s.lidar.mixed_pixels = 2.0;
+  expect_named(s, "lidar.mixed_pixels");
+  s = Scenario{};
+  s.lidar.range_noise_per_m = -1.0;
+  expect_named(s, "lidar.range_noise_per_m");
 }
 
 }  // namespace

@@ -74,7 +74,10 @@ void filter_recorded_bag(const std::optional<std::string>& config, WallsAndWalke
 
   const BagContents in = read_bag(o.input);
   const BagContents out = read_bag(o.output);
-  EXPECT_EQ(out.count.size(), 3u);
+  // The scans, the filtered scans, their labels and (when the registration is on) their poses.
+  const bool registered = stats.config.registration.enabled;
+  EXPECT_EQ(out.count.size(), registered ? 4u : 3u);
+  if (registered) EXPECT_EQ(out.count.at("/scan_pose"), 1265u);
   const auto& scans = out.scans.at("/scan");
   const auto& filtered = out.scans.at("/scan_filtered");
   const auto& labels = out.scans.at("/scan_labels");
@@ -220,6 +223,48 @@ std::string write_sim_bag(const std::string& name, const SimBagOptions& opt) {
   return path;
 }
 
+// --- A real robot driving without odometry ---------------------------------------------------
+
+// negative_2.bag (angusleigh/leg_tracker, BSD): a robot driving through a building with three
+// 768-beam lasers, no odometry and no people: every beam removed is a false removal. Each laser
+// is filtered laser-only (the recording has no odometry topic: the job says so), every scan
+// registers to the map of the earlier ones, and at most 1 % of the valid beams are removed.
+// (Measured 0.29-0.64 %; the target is 0.2 %, not reached: README "Results".)
+TEST(FilterJobLaserOnly, RealRobotWithoutOdometryOrPeopleKeepsItsWalls) {
+  for (const std::string laser : {"/left_scan", "/right_scan", "/rear_scan"}) {
+    FilterJobOptions o;
+    o.input = source_path("data/leg_tracker/negative_2.bag");
+    o.output = temp_path("negative_2" + laser.substr(1) + ".bag");
+    o.scan_topic = laser;
+    std::string notice;
+    const FilterJobStats stats =
+        run_filter_job(o, {}, nullptr, [&](const std::string& n) { notice = n; });
+    EXPECT_TRUE(stats.laser_only);
+    EXPECT_NE(notice.find("no nav_msgs/Odometry topic: filtering laser-only"), std::string::npos)
+        << notice;
+    EXPECT_GE(stats.scans, 434);
+    EXPECT_EQ(stats.scans_filtered, stats.scans) << laser;
+    EXPECT_EQ(stats.counters.scans_without_odometry, stats.scans);
+    EXPECT_GE(stats.counters.scans_registered, stats.scans - 5) << laser;
+    EXPECT_LE(stats.counters.registration_fallbacks, 5) << laser;
+    const BagContents out = read_bag(o.output);
+    EXPECT_EQ(out.count.at(laser + "_pose"), static_cast<std::size_t>(stats.scans));
+    std::int64_t valid = 0, removed = 0;
+    for (const sensor_msgs::LaserScan& l : out.scans.at(laser + "_labels")) {
+      for (const float label : l.intensities) {
+        if (label == static_cast<float>(BeamLabel::kInvalid)) continue;
+        ++valid;
+        removed += label == static_cast<float>(BeamLabel::kDynamic) ||
+                   label == static_cast<float>(BeamLabel::kUnknown);
+      }
+    }
+    EXPECT_GT(valid, 200000) << laser;
+    EXPECT_LE(static_cast<double>(removed), 0.01 * static_cast<double>(valid))
+        << laser << ": " << removed << " of " << valid << " valid beams removed";
+    std::remove(o.output.c_str());
+  }
+}
+
 TEST(FilterJob, MovingRobotWithOdometryAndMountRemovesThePersonOnly) {
   FilterJobOptions o;
   o.input = write_sim_bag("moving.bag", {});
@@ -324,8 +369,16 @@ TEST(FilterJobInput, BadRecordingsAndConfigurationsAreOneLineErrorsAndWriteNothi
   expect_job_error(o, "no sensor_msgs/LaserScan topic /front_scan (LaserScan topics: /scan)");
   o.scan_topic = "/scan";
 
+  // Without odometry: laser-only when the registration is on (dispel's default); the thesis's
+  // filter, which has none, needs the odometry; the odometry topic named and not there, when the
+  // recording has other odometry, is an error (FilterJobLaserOnly tests the laser-only runs).
   o.static_sensor = false;
+  o.config_path = source_path("config/thesis.yaml");
   expect_job_error(o, "no nav_msgs/Odometry topic /odom");
+  o.odom_topic = "none";
+  expect_job_error(o, "--odom-topic none needs the scan registration");
+  o.odom_topic = "/odom";
+  o.config_path.reset();
   o.static_sensor = true;
 
   o.config_path = temp_path("bad_key.yaml");

@@ -27,7 +27,8 @@ std::string scenario_path(const std::string& name) {
 }
 
 TEST(ScenarioYaml, ShippedScenariosLoadAndValidate) {
-  for (const char* name : {"thesis_hall", "empty_hall", "busy_corridor", "warehouse_forklift"}) {
+  for (const char* name : {"thesis_hall", "empty_hall", "busy_corridor", "warehouse_forklift",
+                           "office_corridors", "warehouse_aisles"}) {
     const sim::Scenario s = load_scenario(scenario_path(name));
     EXPECT_EQ(s.name, name);
   }
@@ -103,6 +104,31 @@ TEST(SimPipeline, SimulatedBagHasEveryTopicAndFiltersAndEvaluates) {
 // dispel's default configuration keeps >= 99 % of the static beams, removes >= 90 % of the moving
 // ones and finds a walker within a second (median); the thesis's filter, run on the same bags,
 // does not. Also the empty hall: with nobody there, every removed beam is a false positive.
+// A robot that drives (1 m/s) along rough office corridors with a 768-beam 7.5 Hz scanner mounted
+// off-centre and yawed, beams over the sweep, drifting odometry: the walls that slide along the
+// robot as it passes them used to become "walkers" (preservation 0.895 on seed 1 before the
+// registration and the map's explanation; 0.41 on a real robot). Seed 1, the whole minute:
+// measured 0.993 kept and 0.82 removed (the targets are 0.995 and 0.90: the rejection
+// target is not reached, docs/simulator.md).
+TEST(SimPipeline, DrivingRobotAlongRoughCorridorsKeepsItsWalls) {
+  const std::string dir = test::temp_dir();
+  const sim::Scenario office = load_scenario(scenario_path("office_corridors"));
+  const std::string bag = dir + "/office.bag";
+  write_simulation(sim::simulate(office, 1), office, bag);
+  FilterJobOptions o;
+  o.input = bag;
+  o.output = dir + "/office_filtered.bag";
+  o.scale_to_scanner = true;
+  const FilterJobStats stats = run_filter_job(o);
+  const eval::Rates r = evaluate_bags(bag, o.output);
+  EXPECT_GE(r.preservation_rate(), 0.985);
+  EXPECT_GE(r.rejection_rate(), 0.75);
+  EXPECT_GE(stats.counters.scans_registered, stats.scans - 5);
+  EXPECT_EQ(stats.counters.scans_without_odometry, 0);
+  std::remove(bag.c_str());
+  std::remove(o.output.c_str());
+}
+
 TEST(SimPipeline, DefaultConfigurationMeetsTheTargetsOnTheThesisHall) {
   const std::string dir = test::temp_dir();
   const auto filter_and_evaluate = [&](const std::string& bag, const std::string& config) {

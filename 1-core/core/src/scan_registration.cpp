@@ -51,6 +51,8 @@ void RegistrationConfig::validate() const {
   if (!(min_inlier_share >= 0.0 && min_inlier_share <= 1.0))
     reject("registration.min_inlier_share", min_inlier_share, "in [0, 1]");
   if (min_points < 3) reject("registration.min_points", min_points, ">= 3");
+  if (min_points_with_odometry < min_points)
+    reject("registration.min_points_with_odometry", min_points_with_odometry, ">= min_points");
   if (!(max_correction_m > 0.0)) reject("registration.max_correction_m", max_correction_m, "> 0");
   if (!(max_correction_rad > 0.0 && max_correction_rad <= 3.2))
     reject("registration.max_correction_rad", max_correction_rad, "in (0, 3.2]");
@@ -332,7 +334,9 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
         report.iterations = iteration + 1;
         if (step.head<2>().norm() < 1e-4 && std::abs(step.z()) < 1e-5) break;
       }
-      const bool enough = inliers >= config_.min_points;
+      // With odometry to fall back on, a scan must match more structure to be trusted over it.
+      const bool enough = inliers >= (report.seeded_by_odometry ? config_.min_points_with_odometry
+                                                                : config_.min_points);
       report.inlier_share =
           static_cast<double>(inliers) / static_cast<double>(std::max<std::size_t>(1, sample_.size()));
       report.residual_m = inliers > 0 ? std::sqrt(sum_e2 / inliers) : 0.0;

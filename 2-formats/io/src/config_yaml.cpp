@@ -190,6 +190,7 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   b.number("registration.max_threshold_m", g.max_threshold_m);
   b.number("registration.min_inlier_share", g.min_inlier_share);
   b.integer("registration.min_points", g.min_points);
+  b.integer("registration.min_points_with_odometry", g.min_points_with_odometry);
   b.number("registration.max_correction_m", g.max_correction_m);
   b.number("registration.max_correction_rad", g.max_correction_rad);
   b.number("registration.range_noise_m", g.range_noise_m);

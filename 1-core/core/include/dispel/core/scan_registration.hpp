@@ -38,6 +38,9 @@ struct RegistrationConfig {
   /// seed is used (counted as a fallback).
   double min_inlier_share = 0.2;
   int min_points = 20;
+  /// Seeded by odometry, a scan registers only with this many points matched to structure (a hall
+  /// whose walls are out of range, with people standing about, falls back to the odometry).
+  int min_points_with_odometry = 60;
   double max_correction_m = 0.5;
   double max_correction_rad = 0.35;
   /// The noise of a return (m) and of the seed's motion per scan: the odometry's (these plus 5 %

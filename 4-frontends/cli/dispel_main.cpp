@@ -53,8 +53,9 @@ int main(int argc, char** argv) {
   filter_cmd->add_option("--config", config_path, "YAML configuration (see config/default.yaml)");
   filter_cmd->add_option("--scan-topic", filter.job.scan_topic, "LaserScan topic")
       ->capture_default_str();
-  filter_cmd->add_option("--odom-topic", filter.job.odom_topic,
-                         "Odometry topic; none: laser-only (also when the recording has none)")
+  filter_cmd
+      ->add_option("--odom-topic", filter.job.odom_topic,
+                   "Odometry topic; none: laser-only (also when the recording has none)")
       ->capture_default_str();
   filter_cmd->add_flag("--static-sensor", filter.job.static_sensor,
                        "The sensor does not move (no odometry needed)");

@@ -54,18 +54,20 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
   j["beams_kept_long_occupied"] = s.counters.beams_kept_long_occupied;
   j["laser_only"] = s.laser_only;
   j["beams_kept_explained"] = s.counters.beams_kept_explained;
-  j["registration"] = {
-      {"enabled", s.config.registration.enabled},
-      {"registered", s.counters.scans_registered},
-      {"fallbacks", s.counters.registration_fallbacks},
-      {"degenerate", s.counters.registration_degenerate},
-      {"without_odometry", s.counters.scans_without_odometry},
-      {"residual_m", {{"median", percentile(s.registration_residual_m, 0.5)},
-                      {"p99", percentile(s.registration_residual_m, 0.99)}}},
-      {"inlier_share", {{"median", percentile(s.registration_inlier_share, 0.5)},
-                        {"p01", percentile(s.registration_inlier_share, 0.01)}}},
-      {"degeneracy", {{"median", percentile(s.registration_degeneracy, 0.5)},
-                      {"p01", percentile(s.registration_degeneracy, 0.01)}}}};
+  j["registration"] = {{"enabled", s.config.registration.enabled},
+                       {"registered", s.counters.scans_registered},
+                       {"fallbacks", s.counters.registration_fallbacks},
+                       {"degenerate", s.counters.registration_degenerate},
+                       {"without_odometry", s.counters.scans_without_odometry},
+                       {"residual_m",
+                        {{"median", percentile(s.registration_residual_m, 0.5)},
+                         {"p99", percentile(s.registration_residual_m, 0.99)}}},
+                       {"inlier_share",
+                        {{"median", percentile(s.registration_inlier_share, 0.5)},
+                         {"p01", percentile(s.registration_inlier_share, 0.01)}}},
+                       {"degeneracy",
+                        {{"median", percentile(s.registration_degeneracy, 0.5)},
+                         {"p01", percentile(s.registration_degeneracy, 0.01)}}}};
   j["tracks_created"] = s.counters.tracks_created;
   j["tracks_dropped"] = s.counters.tracks_dropped;
   j["scan_time_us"] = {{"median", percentile(s.scan_time_s, 0.5) * 1e6},

@@ -241,8 +241,7 @@ void DynamicFilter::observe(const Segmentation& segmentation, const Pose2& senso
     if (deskewed != nullptr) {
       const Eigen::Vector2d first = (*deskewed)[static_cast<std::size_t>(o.first_beam)];
       const Eigen::Vector2d last = (*deskewed)[static_cast<std::size_t>(o.last_beam)];
-      obs.points[kCentroid] +=
-          0.5 * ((first - obs.points[kFirst]) + (last - obs.points[kLast]));
+      obs.points[kCentroid] += 0.5 * ((first - obs.points[kFirst]) + (last - obs.points[kLast]));
       obs.points[kFirst] = first;
       obs.points[kLast] = last;
     }

@@ -104,7 +104,7 @@ ScanRegistration::Key ScanRegistration::key_of(const Eigen::Vector2d& p) const {
 bool ScanRegistration::structure(const Voxel& v) const {
   return v.scans >= config_.explained_min_scans &&
          v.last_stamp_s - v.first_stamp_s >= (v.in_free_space ? config_.explained_min_span_in_free_s
-                                                               : config_.explained_min_span_s);
+                                                              : config_.explained_min_span_s);
 }
 
 bool ScanRegistration::explained(std::size_t b) const {
@@ -146,8 +146,8 @@ void ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motio
   normals_.assign(n, Eigen::Vector2d::Zero());
   sample_.clear();
   const double ti = scan.time_increment_s;
-  const bool deskew = config_.deskew && std::isfinite(ti) && ti > 0.0 &&
-                      ti * static_cast<double>(n) <= 1.0;
+  const bool deskew =
+      config_.deskew && std::isfinite(ti) && ti > 0.0 && ti * static_cast<double>(n) <= 1.0;
   for (std::size_t b = 0; b < n; ++b) {
     if (!scan.is_valid(b)) continue;
     const double r = scan.ranges_m[b];
@@ -312,9 +312,8 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
         g /= config_.range_noise_m * config_.range_noise_m;
         // The odometry's noise grows with the motion (5 % of it, and 0.01 rad per metre).
         const double moved = delta.translation().norm(), turned = std::abs(delta.yaw_rad);
-        const double sigma_t = report.seeded_by_odometry
-                                   ? config_.odometry_noise_m + 0.05 * moved
-                                   : config_.constant_velocity_noise_m;
+        const double sigma_t = report.seeded_by_odometry ? config_.odometry_noise_m + 0.05 * moved
+                                                         : config_.constant_velocity_noise_m;
         const double sigma_r = report.seeded_by_odometry
                                    ? config_.odometry_noise_rad + 0.05 * turned + 0.01 * moved
                                    : config_.constant_velocity_noise_rad;
@@ -337,14 +336,15 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
       // With odometry to fall back on, a scan must match more structure to be trusted over it.
       const bool enough = inliers >= (report.seeded_by_odometry ? config_.min_points_with_odometry
                                                                 : config_.min_points);
-      report.inlier_share =
-          static_cast<double>(inliers) / static_cast<double>(std::max<std::size_t>(1, sample_.size()));
+      report.inlier_share = static_cast<double>(inliers) /
+                            static_cast<double>(std::max<std::size_t>(1, sample_.size()));
       report.residual_m = inliers > 0 ? std::sqrt(sum_e2 / inliers) : 0.0;
       // Degeneracy: the translation information's eigenvalues (closed form, 2x2 symmetric).
       const double a = h_data(0, 0), b = h_data(0, 1), d = h_data(1, 1);
       const double mean = 0.5 * (a + d);
       const double spread = std::sqrt(0.25 * (a - d) * (a - d) + b * b);
-      report.degeneracy = mean + spread > 0.0 ? std::max(0.0, mean - spread) / (mean + spread) : 0.0;
+      report.degeneracy =
+          mean + spread > 0.0 ? std::max(0.0, mean - spread) / (mean + spread) : 0.0;
       report.correction = seed.inverse() * pose;
       if (!enough || report.inlier_share < config_.min_inlier_share ||
           report.correction.translation().norm() > config_.max_correction_m ||
@@ -358,8 +358,9 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
         report.degenerate = report.degeneracy < config_.degeneracy_ratio;
         if (delta.translation().norm() > kMinMotionForThreshold_m ||
             std::abs(delta.yaw_rad) > kMinMotionForThreshold_m / kThresholdRange_m) {
-          const double error = report.correction.translation().norm() +
-                               2.0 * kThresholdRange_m * std::sin(0.5 * std::abs(report.correction.yaw_rad));
+          const double error =
+              report.correction.translation().norm() +
+              2.0 * kThresholdRange_m * std::sin(0.5 * std::abs(report.correction.yaw_rad));
           model_error_sum_ += error * error;
           ++model_error_count_;
         }
@@ -405,7 +406,8 @@ void ScanRegistration::add(const std::vector<char>& keep,
       const Eigen::Vector2d& n = normals_[b];
       v.points[v.count] = world_points_[b].cast<float>();
       v.stamps_s[v.count] = last_stamp_s_;
-      v.normals[v.count] = Eigen::Vector2d(c * n.x() - s * n.y(), s * n.x() + c * n.y()).cast<float>();
+      v.normals[v.count] =
+          Eigen::Vector2d(c * n.x() - s * n.y(), s * n.x() + c * n.y()).cast<float>();
       ++v.count;
     }
   }

@@ -21,8 +21,8 @@ sim::Scenario office_loop(double duration_s) {
   s.duration_s = duration_s;
   s.world.walls = {{{-1.1, -1.1}, {31.1, -1.1}}, {{31.1, -1.1}, {31.1, 15.1}},
                    {{31.1, 15.1}, {-1.1, 15.1}}, {{-1.1, 15.1}, {-1.1, -1.1}},
-                   {{1.1, 1.1}, {28.9, 1.1}},   {{28.9, 1.1}, {28.9, 12.9}},
-                   {{28.9, 12.9}, {1.1, 12.9}}, {{1.1, 12.9}, {1.1, 1.1}}};
+                   {{1.1, 1.1}, {28.9, 1.1}},    {{28.9, 1.1}, {28.9, 12.9}},
+                   {{28.9, 12.9}, {1.1, 12.9}},  {{1.1, 12.9}, {1.1, 1.1}}};
   s.world.rough_walls = sim::RoughWalls{};
   s.robot.speed_mps = 1.0;
   s.robot.waypoints = {{30, 0}, {30, 14}, {0, 14}, {0, 0}};
@@ -42,9 +42,9 @@ sim::Scenario office_loop(double duration_s) {
 }
 
 struct Errors {
-  double relative_1s_m = 0.0;    // RMS over all 1 s windows.
+  double relative_1s_m = 0.0;  // RMS over all 1 s windows.
   double relative_1s_rad = 0.0;
-  double final_m = 0.0;          // Position error at the end.
+  double final_m = 0.0;  // Position error at the end.
   int registered = 0;
 };
 
@@ -112,13 +112,14 @@ TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
   const Errors seeded_straight = run(first, straight, true);
   const Errors laser_only = run(first, straight, false);
   EXPECT_GE(seeded_straight.registered, static_cast<int>(first.scans.size()) - 5);
-  std::printf("loop, relative 1 s: seeded %.4f m %.3f deg; after %.0f s seeded %.3f m, wheel "
-              "odometry %.3f m. First 20 s: seeded %.4f m %.3f deg, laser-only %.4f m %.3f deg, "
-              "end %.3f / %.3f m\n",
-              seeded.relative_1s_m, seeded.relative_1s_rad / kDeg, s.duration_s, seeded.final_m,
-              odometry_final_m, seeded_straight.relative_1s_m,
-              seeded_straight.relative_1s_rad / kDeg, laser_only.relative_1s_m,
-              laser_only.relative_1s_rad / kDeg, seeded_straight.final_m, laser_only.final_m);
+  std::printf(
+      "loop, relative 1 s: seeded %.4f m %.3f deg; after %.0f s seeded %.3f m, wheel "
+      "odometry %.3f m. First 20 s: seeded %.4f m %.3f deg, laser-only %.4f m %.3f deg, "
+      "end %.3f / %.3f m\n",
+      seeded.relative_1s_m, seeded.relative_1s_rad / kDeg, s.duration_s, seeded.final_m,
+      odometry_final_m, seeded_straight.relative_1s_m, seeded_straight.relative_1s_rad / kDeg,
+      laser_only.relative_1s_m, laser_only.relative_1s_rad / kDeg, seeded_straight.final_m,
+      laser_only.final_m);
 }
 
 // A corridor with nothing ahead: the scans say nothing about the motion along it. The

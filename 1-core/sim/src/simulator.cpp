@@ -267,7 +267,8 @@ void Scenario::validate() const {
   for (std::size_t i = 0; i < world.shelves.size(); ++i) {
     const ShelfRow& r = world.shelves[i];
     const std::string field = "world.shelves[" + std::to_string(i) + "]";
-    if (!(r.depth_m >= 0.2 && r.depth_m <= 10.0)) reject(field + ".depth_m", r.depth_m, "in [0.2, 10]");
+    if (!(r.depth_m >= 0.2 && r.depth_m <= 10.0))
+      reject(field + ".depth_m", r.depth_m, "in [0.2, 10]");
     if (!(r.bay_m >= 0.5 && r.bay_m <= 20.0)) reject(field + ".bay_m", r.bay_m, "in [0.5, 20]");
     if (!(r.fill >= 0.0 && r.fill <= 1.0)) reject(field + ".fill", r.fill, "in [0, 1]");
     if (!((r.to - r.from).norm() <= 1000.0))
@@ -429,8 +430,7 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
 
   // The sweep: beam i is measured at i * time_increment after the stamp, from where the laser is
   // then (the robot's motion over that time at its current speed and turn rate).
-  const double time_increment =
-      lidar.sweep ? lidar.resolution_deg / (360.0 * lidar.rate_hz) : 0.0;
+  const double time_increment = lidar.sweep ? lidar.resolution_deg / (360.0 * lidar.rate_hz) : 0.0;
   const auto beam_pose = [&](const Pose2& base, double vv, double ww, double dt) {
     if (dt <= 0.0) return base * scenario.robot.laser_mount;
     const double dx = std::abs(ww) < 1e-9 ? vv * dt : vv / ww * std::sin(ww * dt);
@@ -452,7 +452,8 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
       const double dt = (b0 + 0.5 * (g.beam_count - 1)) * time_increment;
       const LaserScan part = raycast(world, beam_pose(base, vv, ww, dt), g, &block_hit);
       for (std::int32_t k = 0; k < g.beam_count; ++k) {
-        scan.ranges_m[static_cast<std::size_t>(b0 + k)] = part.ranges_m[static_cast<std::size_t>(k)];
+        scan.ranges_m[static_cast<std::size_t>(b0 + k)] =
+            part.ranges_m[static_cast<std::size_t>(k)];
         hit[static_cast<std::size_t>(b0 + k)] = block_hit[static_cast<std::size_t>(k)];
       }
     }

@@ -163,7 +163,8 @@ TEST(Simulator, BeamsAreMeasuredOverTheSweepWhileTheRobotTurns) {
     const auto& a = at_once.scans[k].scan.ranges_m;
     const auto& b = swept.scans[k].scan.ranges_m;
     for (std::size_t i = 0; i < 8; ++i) first_differ += std::abs(a[i] - b[i]) > 0.02F;
-    for (std::size_t i = a.size() - 8; i < a.size(); ++i) last_differ += std::abs(a[i] - b[i]) > 0.02F;
+    for (std::size_t i = a.size() - 8; i < a.size(); ++i)
+      last_differ += std::abs(a[i] - b[i]) > 0.02F;
   }
   EXPECT_EQ(first_differ, 0);
   EXPECT_GT(last_differ, 20);

@@ -139,8 +139,9 @@ FilterJobStats run_recording(const FilterJobOptions& o, const Progress& progress
     if (notice) {
       notice(o.odom_topic == "none"
                  ? "laser-only (--odom-topic none): each scan registered to the earlier ones"
-                 : o.input + " has no nav_msgs/Odometry topic: filtering laser-only, each scan "
-                             "registered to the earlier ones");
+                 : o.input +
+                       " has no nav_msgs/Odometry topic: filtering laser-only, each scan "
+                       "registered to the earlier ones");
     }
   }
 

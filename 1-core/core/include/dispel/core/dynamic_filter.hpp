@@ -158,7 +158,7 @@ class DynamicFilter {
     bool ambiguous;  // Touches the field-of-view end or a masked sector.
     double extent_m;
     std::int32_t point_count;
-    double explained_share;  // Of its beams, the share the registered map explains.
+    double explained_share;          // Of its beams, the share the registered map explains.
     Eigen::Vector2d local_centroid;  // In the sensor frame.
   };
   struct Track {
@@ -224,11 +224,11 @@ class DynamicFilter {
   std::vector<Track> tracks_;
   FreeSpaceMap free_space_;
   ScanRegistration registration_;
-  std::vector<char> explained_;  // Per beam of this scan (registration on).
+  std::vector<char> explained_;                // Per beam of this scan (registration on).
   std::vector<std::int32_t> explained_count_;  // Scratch: per object.
-  std::vector<char> keep_;       // Scratch: beams the map learns,
-  std::vector<char> in_free_;    // and which of them end in space seen free.
-  std::optional<Pose2> previous_input_pose_;  // The pose given with the previous scan.
+  std::vector<char> keep_;                     // Scratch: beams the map learns,
+  std::vector<char> in_free_;                  // and which of them end in space seen free.
+  std::optional<Pose2> previous_input_pose_;   // The pose given with the previous scan.
   std::uint64_t next_id_ = 1;
   bool have_previous_ = false;
   double previous_stamp_s_ = 0.0;

@@ -88,9 +88,9 @@ struct DynamicFilterConfig {
 /// The thesis's filter: its parameters (Appendix A: eps 0.1 m, N_min 8, D 0.25 m, L_d 18, L_s 50,
 /// L_v 0.08 m/s, sigma_p^2 0.75, sigma_v^2 1.5, sigma_m^2 15, gamma 0.8) and its rules: gaps as
 /// |r1 - r2|, nearest-neighbour matching, "dynamic for good", weights that only grow; every rule
-/// beyond it off (split inheritance, companions, fragments, free space, registration). Where the thesis gives no
-/// value (how long an unseen track is kept, the time gap and pose jump that reset the tracks)
-/// the values are dispel's earlier ones: 10 missed scans, 1 s, 0.5 m and 0.5 rad.
+/// beyond it off (split inheritance, companions, fragments, free space, registration). Where the
+/// thesis gives no value (how long an unseen track is kept, the time gap and pose jump that reset
+/// the tracks) the values are dispel's earlier ones: 10 missed scans, 1 s, 0.5 m and 0.5 rad.
 DynamicFilterConfig thesis_config();
 
 /// The thesis's parameters were chosen for its scanner: 0.17 degrees between beams, 20 Hz. Returns

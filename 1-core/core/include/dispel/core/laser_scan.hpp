@@ -22,8 +22,8 @@ struct LaserScan {
   /// Time between two beams, seconds (sensor_msgs/LaserScan time_increment): beam i is measured
   /// at stamp_s + i * time_increment_s. 0 when the scanner states none (all beams at stamp_s).
   double time_increment_s = 0.0;
-  std::vector<float> ranges_m;       ///< One range per beam.
-  std::vector<float> intensities;    ///< Empty, or one value per beam.
+  std::vector<float> ranges_m;     ///< One range per beam.
+  std::vector<float> intensities;  ///< Empty, or one value per beam.
 
   /// Number of beams.
   std::size_t size() const { return ranges_m.size(); }

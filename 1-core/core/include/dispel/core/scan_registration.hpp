@@ -22,10 +22,10 @@ namespace dispel {
 struct RegistrationConfig {
   /// false: the sensor pose is the one given (odometry), as in the thesis.
   bool enabled = true;
-  double voxel_size_m = 0.25;     ///< Side of a map voxel.
-  int max_points_per_voxel = 4;   ///< Points kept per voxel (later ones only count the scan).
-  double scan_spacing_m = 0.05;   ///< The scan is thinned to points at least this far apart.
-  double max_range_m = 30.0;      ///< Returns farther than this are not registered.
+  double voxel_size_m = 0.25;        ///< Side of a map voxel.
+  int max_points_per_voxel = 4;      ///< Points kept per voxel (later ones only count the scan).
+  double scan_spacing_m = 0.05;      ///< The scan is thinned to points at least this far apart.
+  double max_range_m = 30.0;         ///< Returns farther than this are not registered.
   double local_map_radius_m = 30.0;  ///< Voxels farther from the sensor are forgotten.
   int max_iterations = 20;
   /// The correspondence threshold adapts to how far the registration moved the seed (KISS-ICP):
@@ -80,13 +80,13 @@ struct RegistrationReport {
   bool fallback = false;    ///< Could not register: the seed was used.
   bool degenerate = false;  ///< Registered, with a direction the scan does not constrain.
   bool seeded_by_odometry = false;
-  std::int32_t points = 0;        ///< Points of the thinned scan.
+  std::int32_t points = 0;  ///< Points of the thinned scan.
   std::int32_t iterations = 0;
-  double inlier_share = 0.0;      ///< Share of the points with a correspondence.
-  double residual_m = 0.0;        ///< RMS point-to-line distance of the inliers.
-  double degeneracy = 0.0;        ///< Weakest / strongest translation information (0..1).
-  double threshold_m = 0.0;       ///< The correspondence threshold used.
-  Pose2 correction;               ///< Registered pose relative to the seed.
+  double inlier_share = 0.0;  ///< Share of the points with a correspondence.
+  double residual_m = 0.0;    ///< RMS point-to-line distance of the inliers.
+  double degeneracy = 0.0;    ///< Weakest / strongest translation information (0..1).
+  double threshold_m = 0.0;   ///< The correspondence threshold used.
+  Pose2 correction;           ///< Registered pose relative to the seed.
 };
 
 /// Registers scans to a local map and says which points it explains. Feed scans in time order;
@@ -129,9 +129,9 @@ class ScanRegistration {
     std::array<Eigen::Vector2f, 4> normals;
     std::array<double, 4> stamps_s;  // When each point was added.
     std::uint8_t count = 0;
-    std::int32_t scans = 0;        // Scans that hit it.
-    bool in_free_space = false;    // First hit where the scanner had seen through.
-    std::uint32_t last_scan = 0;   // The last one.
+    std::int32_t scans = 0;       // Scans that hit it.
+    bool in_free_space = false;   // First hit where the scanner had seen through.
+    std::uint32_t last_scan = 0;  // The last one.
     double first_stamp_s = 0.0;
     double last_stamp_s = 0.0;
   };
@@ -147,11 +147,11 @@ class ScanRegistration {
   std::uint32_t scan_count_ = 0;
   bool have_previous_ = false;
   double previous_stamp_s_ = 0.0;
-  Pose2 previous_pose_;                   // Registered.
+  Pose2 previous_pose_;  // Registered.
   std::optional<Pose2> previous_odometry_;
-  Pose2 velocity_per_s_;                  // Sensor-frame motion per second, last estimate.
-  Pose2 odometry_to_fixed_;               // Registered fixed frame from the odometry frame.
-  double model_error_sum_ = 0.0;          // Adaptive threshold: squared deviations, count.
+  Pose2 velocity_per_s_;          // Sensor-frame motion per second, last estimate.
+  Pose2 odometry_to_fixed_;       // Registered fixed frame from the odometry frame.
+  double model_error_sum_ = 0.0;  // Adaptive threshold: squared deviations, count.
   std::int64_t model_error_count_ = 0;
   double last_stamp_s_ = 0.0;
   Pose2 last_pose_;

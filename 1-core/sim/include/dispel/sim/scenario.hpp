@@ -27,8 +27,8 @@ struct Rectangle {
 /// joined by short steps; some pieces are glass (no return); doors are gaps with a recess behind;
 /// furniture legs stand in front of it.
 struct RoughWalls {
-  double amplitude_m = 0.05;   ///< Each piece is offset by up to this much along the normal.
-  double piece_min_m = 0.3;    ///< Length of a piece, drawn uniformly between these.
+  double amplitude_m = 0.05;  ///< Each piece is offset by up to this much along the normal.
+  double piece_min_m = 0.3;   ///< Length of a piece, drawn uniformly between these.
   double piece_max_m = 2.0;
   double doors_per_10m = 1.0;  ///< 0.9 m gaps with a 0.25 m deep recess.
   double legs_per_10m = 2.0;   ///< Pairs of furniture legs (2.5 cm radius) 0.15-0.6 m off the wall.

@@ -52,7 +52,7 @@ struct FilterJobStats {
   std::vector<double> registration_residual_m;
   std::vector<double> registration_inlier_share;
   std::vector<double> registration_degeneracy;
-  DynamicFilterConfig config;       ///< The configuration used (scaled to the scanner if asked).
+  DynamicFilterConfig config;  ///< The configuration used (scaled to the scanner if asked).
   std::optional<double> scan_period_s;  ///< The scanner's period, when it was needed and known.
   std::int64_t malformed_lines = 0;     ///< CARMEN only: skipped lines.
   std::int64_t odometry_refused = 0;    ///< Odometry messages out of order or not finite.
@@ -64,7 +64,6 @@ using Notice = std::function<void(const std::string&)>;
 /// Runs the job. The output appears only when complete (written to "<output>.partial" and
 /// renamed). @throws JobError, JobCancelled
 FilterJobStats run_filter_job(const FilterJobOptions& options, const Progress& progress = {},
-                              const std::atomic<bool>* cancel = nullptr,
-                              const Notice& notice = {});
+                              const std::atomic<bool>* cancel = nullptr, const Notice& notice = {});
 
 }  // namespace dispel::jobs

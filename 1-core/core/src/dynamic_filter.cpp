@@ -133,15 +133,15 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   if (registering && checked.learn) {
     // The map learns what stays in the scan: static objects and beams of no object.
     keep_.resize(out.labels.size());
-    in_free_.assign(config_.free_space.enabled ? out.labels.size() : 0, 0);
-    const std::vector<Eigen::Vector2d>& points = registration_.points();
     for (std::size_t b = 0; b < out.labels.size(); ++b) {
       keep_[b] = out.labels[b] == BeamLabel::kStatic || out.labels[b] == BeamLabel::kNoObject;
-      if (keep_[b] && !in_free_.empty()) {
-        in_free_[b] = free_space_.known_free(points[b]);
-      }
     }
-    registration_.add(keep_, in_free_);
+    if (config_.free_space.enabled) {
+      registration_.add(keep_,
+                        [this](const Eigen::Vector2d& p) { return free_space_.known_free(p); });
+    } else {
+      registration_.add(keep_, {});
+    }
   }
   ++counters_.events[static_cast<std::size_t>(checked.event)];
 }

@@ -386,7 +386,7 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
 }
 
 void ScanRegistration::add(const std::vector<char>& keep,
-                           const std::vector<char>& appeared_in_free_space) {
+                           const std::function<bool(const Eigen::Vector2d&)>& in_free_space) {
   const double max_r2 = config_.max_range_m * config_.max_range_m;
   const double c = std::cos(last_pose_.yaw_rad), s = std::sin(last_pose_.yaw_rad);
   for (std::size_t b = 0; b < world_points_.size() && b < keep.size(); ++b) {
@@ -396,7 +396,7 @@ void ScanRegistration::add(const std::vector<char>& keep,
     if (v.last_scan != scan_count_) {
       if (v.scans == 0) {
         v.first_stamp_s = last_stamp_s_;
-        v.in_free_space = b < appeared_in_free_space.size() && appeared_in_free_space[b] != 0;
+        v.in_free_space = in_free_space && in_free_space(world_points_[b]);
       }
       ++v.scans;
       v.last_scan = scan_count_;

@@ -76,6 +76,12 @@ struct ActorState {
   bool moving = false;
 };
 
+// The motion over dt at speed v and turn rate w, exactly along the arc.
+Pose2 arc_motion(double v, double w, double dt) {
+  if (std::abs(w) < 1e-9) return {v * dt, 0.0, 0.0};
+  return {v / w * std::sin(w * dt), v / w * (1.0 - std::cos(w * dt)), w * dt};
+}
+
 // Wheel speeds and IMU from true motion, with the errors of the scenario.
 class OdometrySensors {
  public:
@@ -106,7 +112,7 @@ class OdometrySensors {
     // Dead reckoning from the measured wheels (exact arc per step).
     const double vm = 0.5 * (s.wheel_left_mps + s.wheel_right_mps);
     const double wm = (s.wheel_right_mps - s.wheel_left_mps) / wheel_base_;
-    odom_ = odom_ * Pose2{arc_x(vm, wm, dt), arc_y(vm, wm, dt), wm * dt};
+    odom_ = odom_ * arc_motion(vm, wm, dt);
     s.odom_pose = odom_;
     s.odom_v_mps = vm;
     s.odom_w_radps = wm;
@@ -115,13 +121,6 @@ class OdometrySensors {
   void start_at(const Pose2& p) { odom_ = p; }
 
  private:
-  static double arc_x(double v, double w, double dt) {
-    return std::abs(w) < 1e-9 ? v * dt : v / w * std::sin(w * dt);
-  }
-  static double arc_y(double v, double w, double dt) {
-    return std::abs(w) < 1e-9 ? 0.0 : v / w * (1.0 - std::cos(w * dt));
-  }
-
   SensorConfig c_;
   double wheel_base_;
   std::mt19937_64& rng_;
@@ -433,9 +432,7 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
   const double time_increment = lidar.sweep ? lidar.resolution_deg / (360.0 * lidar.rate_hz) : 0.0;
   const auto beam_pose = [&](const Pose2& base, double vv, double ww, double dt) {
     if (dt <= 0.0) return base * scenario.robot.laser_mount;
-    const double dx = std::abs(ww) < 1e-9 ? vv * dt : vv / ww * std::sin(ww * dt);
-    const double dy = std::abs(ww) < 1e-9 ? 0.0 : vv / ww * (1.0 - std::cos(ww * dt));
-    return base * Pose2{dx, dy, ww * dt} * scenario.robot.laser_mount;
+    return base * arc_motion(vv, ww, dt) * scenario.robot.laser_mount;
   };
   // Casts the scan, in blocks of beams that share one laser pose (8 beams: 1.5 mm apart at
   // 1.5 m/s and 0.17 degrees at 20 Hz).

@@ -226,8 +226,7 @@ class DynamicFilter {
   ScanRegistration registration_;
   std::vector<char> explained_;                // Per beam of this scan (registration on).
   std::vector<std::int32_t> explained_count_;  // Scratch: per object.
-  std::vector<char> keep_;                     // Scratch: beams the map learns,
-  std::vector<char> in_free_;                  // and which of them end in space seen free.
+  std::vector<char> keep_;                     // Scratch: beams the map learns.
   std::optional<Pose2> previous_input_pose_;   // The pose given with the previous scan.
   std::uint64_t next_id_ = 1;
   bool have_previous_ = false;

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <unordered_map>
 #include <vector>
@@ -111,11 +112,12 @@ class ScanRegistration {
   bool explained(std::size_t b) const;
 
   /// Adds the beams of the last registered scan for which @p keep is true to the map, and forgets
-  /// voxels beyond local_map_radius_m. @p appeared_in_free_space (empty, or one per beam) says
-  /// which beams end where the scanner saw through before: a voxel first hit by such a beam (a
-  /// cart driving along itself, a walker's trail) is not structure until it has been hit for
-  /// explained_min_span_in_free_s.
-  void add(const std::vector<char>& keep, const std::vector<char>& appeared_in_free_space);
+  /// voxels beyond local_map_radius_m. @p in_free_space (may be empty: never) says whether a
+  /// point ends where the scanner saw through before; it is asked only for a point that creates a
+  /// voxel. A voxel first hit by such a point (a cart driving along itself, a walker's trail) is
+  /// not structure until it has been hit for explained_min_span_in_free_s.
+  void add(const std::vector<char>& keep,
+           const std::function<bool(const Eigen::Vector2d&)>& in_free_space);
 
   /// Forgets the map and the motion (after a jump in time or of the fixed frame).
   void reset();

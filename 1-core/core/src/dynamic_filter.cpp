@@ -42,12 +42,6 @@ constexpr double kAttachedRange_m = 1.5;
 // Fragments are absorbed by dynamic tracks seen in this scan or missed for a few scans at most.
 constexpr std::int32_t kFragmentMaxMissed = 2;
 
-Eigen::Vector2d beam_point(const LaserScan& scan, std::size_t b, const Pose2& sensor_pose) {
-  const double r = scan.ranges_m[b];
-  const double bearing = scan.bearing_rad(b);
-  return sensor_pose.apply({r * std::cos(bearing), r * std::sin(bearing)});
-}
-
 }  // namespace
 
 const char* filter_event_name(FilterEvent event) {
@@ -108,6 +102,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   }
   out.sensor_pose = pose;
   previous_input_pose_ = sensor_pose;
+  place_beams(scan, pose);
   segmenter_.segment(scan, out.segmentation);
   observe(out.segmentation, pose, scan.range_max_m);
   if (registering) explain(scan, out.segmentation);
@@ -129,7 +124,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
       if (t >= 0) tracks_[t].object_index = static_cast<std::int32_t>(i);
     }
   }
-  label(scan, pose, checked, out);
+  label(scan, checked, out);
   if (registering && checked.learn) {
     // The map learns what stays in the scan: static objects and beams of no object.
     keep_.resize(out.labels.size());
@@ -213,6 +208,20 @@ void DynamicFilter::pass_through(const LaserScan& scan, FilterEvent event, Filte
   for (Track& t : tracks_) t.object_index = -1;
   write_tracks(out);
   ++counters_.events[static_cast<std::size_t>(event)];
+}
+
+// Each valid beam's end point in the fixed frame (NaN for the others), for the rules that ask
+// where a beam ends.
+void DynamicFilter::place_beams(const LaserScan& scan, const Pose2& sensor_pose) {
+  const std::vector<Eigen::Vector2d>& unit = directions_.of(scan);
+  const PoseTransform to_fixed(sensor_pose);
+  beam_points_.resize(scan.size());
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    beam_points_[b] =
+        scan.is_valid(b)
+            ? to_fixed(static_cast<double>(scan.ranges_m[b]) * unit[b])
+            : Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  }
 }
 
 // Step 3: each object's first edge, last edge and centroid in the fixed frame, and whether each
@@ -332,7 +341,7 @@ void DynamicFilter::classify(const LaserScan& scan, const Pose2& sensor_pose,
   }
   start_tracks(scan.stamp_s);
   if (config_.free_space.enabled) {
-    mark_objects_in_free_space(scan, sensor_pose, segmentation);
+    mark_objects_in_free_space(scan, segmentation);
     free_space_.add_scan(scan, sensor_pose);
   }
   spread_to_companions();
@@ -435,13 +444,13 @@ DynamicFilter::Track DynamicFilter::new_track(const Observation& obs, double sta
 
 // An object most of whose points stand where beams passed freely before (and not as far as the
 // map knows, hit since) has moved there: it is dynamic at once, unless it is too large to be.
-void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan, const Pose2& sensor_pose,
+void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan,
                                                const Segmentation& segmentation) {
   std::vector<std::int32_t> in_free(segmentation.objects.size(), 0);
   for (std::size_t b = 0; b < scan.size(); ++b) {
     const std::int32_t o = segmentation.beam_labels[b];
     if (o < 0) continue;
-    if (free_space_.known_free(beam_point(scan, b, sensor_pose))) {
+    if (free_space_.known_free(beam_points_[b])) {
       ++in_free[static_cast<std::size_t>(o)];
     }
   }
@@ -500,7 +509,7 @@ void DynamicFilter::forget_lost_tracks() {
 
 // Step 7: one label per beam from its object's verdict; the beams of dynamic and unknown objects
 // become NaN.
-void DynamicFilter::label(const LaserScan& scan, const Pose2& sensor_pose, const ScanCheck& check,
+void DynamicFilter::label(const LaserScan& scan, const ScanCheck& check,
                           FilterResult& out) {
   out.event = check.event;
   out.filtered = scan;
@@ -510,7 +519,7 @@ void DynamicFilter::label(const LaserScan& scan, const Pose2& sensor_pose, const
   for (std::size_t b = 0; b < scan.size(); ++b) {
     const std::int32_t l = segment_labels[b];
     BeamLabel label = BeamLabel::kInvalid;
-    if (l >= 0 || l == kLabelNoise) label = beam_label(scan, b, l, sensor_pose, check.learn);
+    if (l >= 0 || l == kLabelNoise) label = beam_label(scan, b, l, check.learn);
     if (label == BeamLabel::kDynamic) {
       ++out.removed_dynamic;
       out.filtered.ranges_m[b] = std::numeric_limits<float>::quiet_NaN();
@@ -530,15 +539,14 @@ void DynamicFilter::label(const LaserScan& scan, const Pose2& sensor_pose, const
 // moving object that ends where something has stood for a while is kept. The beam's point is
 // computed only when one of those rules needs it.
 BeamLabel DynamicFilter::beam_label(const LaserScan& scan, std::size_t b,
-                                    std::int32_t segment_label, const Pose2& sensor_pose,
-                                    bool learned) {
+                                    std::int32_t segment_label, bool learned) {
   const FreeSpaceConfig& fs = config_.free_space;
   const bool check_occupied = learned && fs.enabled && fs.keep_long_occupied;
   const bool explained = !explained_.empty() && explained_[b] != 0;
   if (segment_label == kLabelNoise) {
     if (!learned || !(config_.tracking.fragment_distance_m > 0.0) || explained)
       return BeamLabel::kNoObject;
-    const Eigen::Vector2d point = beam_point(scan, b, sensor_pose);
+    const Eigen::Vector2d point = beam_points_[b];
     if (near_dynamic_track(point, scan.stamp_s) &&
         !(check_occupied && free_space_.hit_balance(point) >= fs.max_recent_hits)) {
       ++counters_.beams_removed_fragments;
@@ -553,7 +561,7 @@ BeamLabel DynamicFilter::beam_label(const LaserScan& scan, std::size_t b,
     return BeamLabel::kStatic;
   }
   if (check_occupied) {
-    const Eigen::Vector2d point = beam_point(scan, b, sensor_pose);
+    const Eigen::Vector2d point = beam_points_[b];
     const bool slow = v.speed_mps <= 2.0 * config_.classification.speed_limit_mps;
     if (slow ? free_space_.hit_balance(point) >= fs.max_recent_hits
              : free_space_.occupied_scans(point) >= fs.long_occupied_scans) {

@@ -44,6 +44,7 @@ void FreeSpaceConfig::validate() const {
 FreeSpaceMap::FreeSpaceMap(FreeSpaceConfig config) : config_(config) {
   config_.validate();
   cells_per_side_ = static_cast<std::int64_t>(std::ceil(config_.extent_m / config_.cell_size_m));
+  tiles_per_side_ = (cells_per_side_ + kTileSide - 1) / kTileSide;
 }
 
 void FreeSpaceMap::clear() {
@@ -53,7 +54,8 @@ void FreeSpaceMap::clear() {
 
 void FreeSpaceMap::recenter(const Eigen::Vector2d& center) {
   origin_ = center - Eigen::Vector2d::Constant(0.5 * config_.extent_m);
-  cells_.assign(static_cast<std::size_t>(cells_per_side_ * cells_per_side_), Cell{});
+  cells_.assign(static_cast<std::size_t>(tiles_per_side_ * tiles_per_side_ * kTileSide * kTileSide),
+                Cell{});
   placed_ = true;
 }
 
@@ -65,22 +67,25 @@ bool FreeSpaceMap::index_of(const Eigen::Vector2d& p, std::int64_t& index) const
   const auto ix = static_cast<std::int64_t>(fx);
   const auto iy = static_cast<std::int64_t>(fy);
   if (ix >= cells_per_side_ || iy >= cells_per_side_) return false;
-  index = iy * cells_per_side_ + ix;
+  index = cell_index(ix, iy);
   return true;
 }
 
 bool FreeSpaceMap::known_free(const Eigen::Vector2d& point_m) const {
   const double c = config_.cell_size_m;
   const int n = config_.neighbourhood_cells;
+  const auto free = [&](const Eigen::Vector2d& p) {
+    std::int64_t i = 0;
+    if (!index_of(p, i)) return false;
+    const Cell& cell = cells_[static_cast<std::size_t>(i)];
+    return cell.balance <= -config_.min_free_observations &&
+           stamp_s_ - cell.last_free_stamp_s <= config_.memory_s;
+  };
+  // The point's own cell first: most points asked about (a surface's) fail there.
+  if (!free(point_m)) return false;
   for (int dx = -n; dx <= n; ++dx) {
     for (int dy = -n; dy <= n; ++dy) {
-      std::int64_t i = 0;
-      if (!index_of(point_m + Eigen::Vector2d(dx * c, dy * c), i)) return false;
-      const Cell& cell = cells_[static_cast<std::size_t>(i)];
-      if (cell.balance > -config_.min_free_observations ||
-          stamp_s_ - cell.last_free_stamp_s > config_.memory_s) {
-        return false;
-      }
+      if ((dx != 0 || dy != 0) && !free(point_m + Eigen::Vector2d(dx * c, dy * c))) return false;
     }
   }
   return true;
@@ -116,11 +121,10 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
           ? std::min(config_.free_range_m, static_cast<double>(scan.range_max_m))
           : 0.0;
   // Each beam's direction in the fixed frame, once per scan (both passes below need it).
+  const std::vector<Eigen::Vector2d>& unit = beam_directions_.of(scan);
+  const PoseTransform to_fixed(sensor_pose);
   directions_.resize(scan.size());
-  for (std::size_t b = 0; b < scan.size(); ++b) {
-    const double bearing = sensor_pose.yaw_rad + scan.bearing_rad(b);
-    directions_[b] = Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
-  }
+  for (std::size_t b = 0; b < scan.size(); ++b) directions_[b] = to_fixed.rotate(unit[b]);
   const int cap = config_.min_free_observations + config_.max_recent_hits;
   // Hits first: a cell hit in this scan counts as hit, whatever other beams passed through it.
   for (std::size_t b = 0; b < scan.size(); ++b) {
@@ -176,7 +180,7 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     const double length = (free_until - start) / c;
     double t = 0.0;
     while (t < length && ix >= 0 && iy >= 0 && ix < cells_per_side_ && iy < cells_per_side_) {
-      Cell& cell = cells_[static_cast<std::size_t>(iy * cells_per_side_ + ix)];
+      Cell& cell = cells_[static_cast<std::size_t>(cell_index(ix, iy))];
       if (cell.last_scan != scans_) {
         cell.last_scan = scans_;
         cell.balance = static_cast<std::int16_t>(std::max(cell.balance - 1, -cap));

@@ -86,6 +86,7 @@ ScanRegistration::ScanRegistration(RegistrationConfig config)
 
 void ScanRegistration::reset() {
   map_.clear();
+  explaining_valid_ = false;
   have_previous_ = false;
   previous_odometry_.reset();
   velocity_per_s_ = Pose2{};
@@ -111,26 +112,36 @@ bool ScanRegistration::explained(std::size_t b) const {
   if (b >= world_points_.size()) return false;
   const Eigen::Vector2d& p = world_points_[b];
   if (!std::isfinite(p.x())) return false;
-  const double limit2 = config_.explained_distance_m * config_.explained_distance_m;
   const auto ix = static_cast<std::int64_t>(std::floor(p.x() / config_.voxel_size_m));
   const auto iy = static_cast<std::int64_t>(std::floor(p.y() / config_.voxel_size_m));
-  for (std::int64_t x = ix - 1; x <= ix + 1; ++x) {
-    for (std::int64_t y = iy - 1; y <= iy + 1; ++y) {
-      const auto it = map_.find(key_at(x, y));
-      // Structure explains only while it is still seen: someone who stood there and left
-      // explains no one who comes by later.
-      if (it == map_.end() || !structure(it->second) ||
-          last_stamp_s_ - it->second.last_stamp_s > config_.explained_max_age_s) {
-        continue;
-      }
-      const Voxel& v = it->second;
-      const double min_age =
-          v.in_free_space ? config_.explained_min_span_in_free_s : config_.explained_min_span_s;
-      for (std::uint8_t i = 0; i < v.count; ++i) {
-        if (last_stamp_s_ - v.stamps_s[i] >= min_age &&
-            (v.points[i].cast<double>() - p).squaredNorm() <= limit2) {
-          return true;
+  // The voxels around the point that can explain it, found once for consecutive beams in the
+  // same voxel (until the next registration or add()).
+  if (!explaining_valid_ || ix != explaining_ix_ || iy != explaining_iy_) {
+    explaining_.clear();
+    for (std::int64_t x = ix - 1; x <= ix + 1; ++x) {
+      for (std::int64_t y = iy - 1; y <= iy + 1; ++y) {
+        const auto it = map_.find(key_at(x, y));
+        // Structure explains only while it is still seen: someone who stood there and left
+        // explains no one who comes by later.
+        if (it == map_.end() || !structure(it->second) ||
+            last_stamp_s_ - it->second.last_stamp_s > config_.explained_max_age_s) {
+          continue;
         }
+        explaining_.push_back(&it->second);
+      }
+    }
+    explaining_valid_ = true;
+    explaining_ix_ = ix;
+    explaining_iy_ = iy;
+  }
+  const double limit2 = config_.explained_distance_m * config_.explained_distance_m;
+  for (const Voxel* v : explaining_) {
+    const double min_age =
+        v->in_free_space ? config_.explained_min_span_in_free_s : config_.explained_min_span_s;
+    for (std::uint8_t i = 0; i < v->count; ++i) {
+      if (last_stamp_s_ - v->stamps_s[i] >= min_age &&
+          (v->points[i].cast<double>() - p).squaredNorm() <= limit2) {
+        return true;
       }
     }
   }
@@ -138,22 +149,35 @@ bool ScanRegistration::explained(std::size_t b) const {
 }
 
 // Beam points in the sensor frame at the scan's stamp: each beam moved back by the sensor's
-// motion between the stamp and its own time (time_increment); normals from the neighbours; the
-// sample for the registration thinned to scan_spacing_m.
+// motion between the stamp and its own time (time_increment); the sample for the registration
+// thinned to scan_spacing_m.
 void ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s) {
   const std::size_t n = scan.size();
+  const std::vector<Eigen::Vector2d>& unit = directions_.of(scan);
   local_points_.assign(n, Eigen::Vector2d(kNaN, kNaN));
-  normals_.assign(n, Eigen::Vector2d::Zero());
   sample_.clear();
   const double ti = scan.time_increment_s;
   const bool deskew =
       config_.deskew && std::isfinite(ti) && ti > 0.0 && ti * static_cast<double>(n) <= 1.0;
+  // The motion from the stamp to beam b's time is b steps of one beam's: its rotation by
+  // recurrence (one sine and cosine per scan), its translation to first order in time.
+  const double step_yaw = motion_per_s.yaw_rad * ti;
+  const double cs = std::cos(step_yaw), ss = std::sin(step_yaw);
+  double c = 1.0, s = 0.0;
   for (std::size_t b = 0; b < n; ++b) {
+    if (b > 0 && deskew) {
+      const double c_next = c * cs - s * ss;
+      s = s * cs + c * ss;
+      c = c_next;
+    }
     if (!scan.is_valid(b)) continue;
     const double r = scan.ranges_m[b];
-    const double a = scan.bearing_rad(b);
-    Eigen::Vector2d p(r * std::cos(a), r * std::sin(a));
-    if (deskew) p = scaled(motion_per_s, ti * static_cast<double>(b)).apply(p);
+    Eigen::Vector2d p = r * unit[b];
+    if (deskew) {
+      const double t = ti * static_cast<double>(b);
+      p = Eigen::Vector2d(c * p.x() - s * p.y() + motion_per_s.x_m * t,
+                          s * p.x() + c * p.y() + motion_per_s.y_m * t);
+    }
     local_points_[b] = p;
   }
   const double spacing2 = config_.scan_spacing_m * config_.scan_spacing_m;
@@ -161,59 +185,86 @@ void ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motio
   Eigen::Vector2d last(kNaN, kNaN);
   for (std::size_t b = 0; b < n; ++b) {
     const Eigen::Vector2d& p = local_points_[b];
-    if (!std::isfinite(p.x())) continue;
-    // The normal: the direction of least spread of the neighbouring beams' points on the same
-    // surface (within 0.3 m, up to 4 beams either side), when there are at least 3 of them.
-    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-    int count = 0;
-    const std::size_t lo = b >= 4 ? b - 4 : 0, hi = std::min(n - 1, b + 4);
-    for (std::size_t j = lo; j <= hi; ++j) {
-      const Eigen::Vector2d& q = local_points_[j];
-      if (!std::isfinite(q.x()) || (q - p).squaredNorm() > 0.09) continue;
-      mean += q;
-      cov += q * q.transpose();
-      ++count;
-    }
-    if (count >= 3) {
-      mean /= count;
-      cov = cov / count - mean * mean.transpose();
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
-      Eigen::Vector2d normal = eig.eigenvectors().col(0);
-      // A line, not a blob: the spread across it well below the spread along it.
-      if (eig.eigenvalues()(0) < 0.1 * eig.eigenvalues()(1)) {
-        if (normal.dot(p) > 0.0) normal = -normal;  // Facing the sensor.
-        normals_[b] = normal;
-      }
-    }
-    if (p.squaredNorm() > max_r2) continue;
+    if (!std::isfinite(p.x()) || p.squaredNorm() > max_r2) continue;
     if (std::isfinite(last.x()) && (p - last).squaredNorm() < spacing2) continue;
     sample_.push_back(static_cast<std::int32_t>(b));
     last = p;
   }
 }
 
-// The points of the voxels around each sample point (at @p pose), structure only or all; returns
-// how many sample points have a candidate.
-std::int32_t ScanRegistration::gather_candidates(const Pose2& pose, int reach,
+// The normal of beam b's surface in the sensor frame: the direction of least spread of the
+// neighbouring beams' points on the same surface (within 0.3 m, up to 4 beams either side), when
+// there are at least 3 of them and they lie along a line, not in a blob; zero otherwise. Asked
+// only for the points that enter the map.
+Eigen::Vector2d ScanRegistration::normal_at(std::size_t b) const {
+  const std::size_t n = local_points_.size();
+  const Eigen::Vector2d& p = local_points_[b];
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  int count = 0;
+  const std::size_t lo = b >= 4 ? b - 4 : 0, hi = std::min(n - 1, b + 4);
+  for (std::size_t j = lo; j <= hi; ++j) {
+    const Eigen::Vector2d& q = local_points_[j];
+    if (!std::isfinite(q.x()) || (q - p).squaredNorm() > 0.09) continue;
+    mean += q;
+    cov += q * q.transpose();
+    ++count;
+  }
+  if (count < 3) return Eigen::Vector2d::Zero();
+  mean /= count;
+  cov = cov / count - mean * mean.transpose();
+  // The eigenvalues of the symmetric 2x2 covariance in closed form; the line's direction is the
+  // eigenvector of the larger one, the normal is across it.
+  const double a = cov(0, 0), off = cov(0, 1), d = cov(1, 1);
+  const double half_sum = 0.5 * (a + d);
+  const double spread = std::sqrt(0.25 * (a - d) * (a - d) + off * off);
+  const double large = half_sum + spread, small = half_sum - spread;
+  if (!(small < 0.1 * large)) return Eigen::Vector2d::Zero();
+  const double direction = 0.5 * std::atan2(2.0 * off, a - d);
+  Eigen::Vector2d normal(-std::sin(direction), std::cos(direction));
+  if (normal.dot(p) > 0.0) normal = -normal;  // Facing the sensor.
+  return normal;
+}
+
+// The candidate map points of each sample point (at @p pose): the points of the voxels within
+// @p reach of its voxel (structure only, or all) that lie within @p radius of it; returns how many
+// sample points have one. The registration moves a point by less than the threshold, so a radius
+// of twice the threshold keeps every point it can match.
+std::int32_t ScanRegistration::gather_candidates(const Pose2& pose, int reach, double radius,
                                                  bool structure_only) {
   candidate_begin_.assign(sample_.size() + 1, 0);
   candidate_points_.clear();
   candidate_normals_.clear();
+  const PoseTransform to_fixed(pose);
+  const double radius2 = radius * radius;
   std::int32_t covered = 0;
+  // Consecutive sample points mostly fall in the same voxel: its neighbourhood is looked up once.
+  bool have_last = false;
+  std::int64_t last_ix = 0, last_iy = 0;
   for (std::size_t i = 0; i < sample_.size(); ++i) {
     candidate_begin_[i] = static_cast<std::int32_t>(candidate_points_.size());
-    const Eigen::Vector2d q = pose.apply(local_points_[static_cast<std::size_t>(sample_[i])]);
+    const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
     const auto ix = static_cast<std::int64_t>(std::floor(q.x() / config_.voxel_size_m));
     const auto iy = static_cast<std::int64_t>(std::floor(q.y() / config_.voxel_size_m));
-    for (std::int64_t x = ix - reach; x <= ix + reach; ++x) {
-      for (std::int64_t y = iy - reach; y <= iy + reach; ++y) {
-        const auto it = map_.find(key_at(x, y));
-        if (it == map_.end() || (structure_only && !structure(it->second))) continue;
-        for (std::uint8_t j = 0; j < it->second.count; ++j) {
-          candidate_points_.push_back(it->second.points[j].cast<double>());
-          candidate_normals_.push_back(it->second.normals[j].cast<double>());
+    if (!have_last || ix != last_ix || iy != last_iy) {
+      neighbourhood_.clear();
+      for (std::int64_t x = ix - reach; x <= ix + reach; ++x) {
+        for (std::int64_t y = iy - reach; y <= iy + reach; ++y) {
+          const auto it = map_.find(key_at(x, y));
+          if (it == map_.end() || (structure_only && !structure(it->second))) continue;
+          neighbourhood_.push_back(&it->second);
         }
+      }
+      have_last = true;
+      last_ix = ix;
+      last_iy = iy;
+    }
+    for (const Voxel* v : neighbourhood_) {
+      for (std::uint8_t j = 0; j < v->count; ++j) {
+        const Eigen::Vector2d point = v->points[j].cast<double>();
+        if ((point - q).squaredNorm() > radius2) continue;
+        candidate_points_.push_back(point);
+        candidate_normals_.push_back(v->normals[j].cast<double>());
       }
     }
     if (static_cast<std::int32_t>(candidate_points_.size()) > candidate_begin_[i]) ++covered;
@@ -227,6 +278,7 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
                                       RegistrationReport& report) {
   report = RegistrationReport{};
   ++scan_count_;
+  explaining_valid_ = false;
   const double dt = have_previous_ ? scan.stamp_s - previous_stamp_s_ : 0.0;
   // The seed: the odometry's motion since the previous scan, else constant velocity.
   Pose2 seed, delta;
@@ -261,8 +313,8 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
       // A young map (the first scans, or a scene that has just changed) has no structure yet:
       // then every voxel is a candidate.
       const int reach = static_cast<int>(std::ceil(threshold / config_.voxel_size_m));
-      if (gather_candidates(seed, reach, true) < config_.min_points) {
-        gather_candidates(seed, reach, false);
+      if (gather_candidates(seed, reach, 2.0 * threshold, true) < config_.min_points) {
+        gather_candidates(seed, reach, 2.0 * threshold, false);
       }
 
       const double kappa = threshold / 3.0;
@@ -276,8 +328,9 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
         inliers = 0;
         sum_e2 = 0.0;
         const Eigen::Vector2d c = pose.translation();
+        const PoseTransform to_fixed(pose);
         for (std::size_t i = 0; i < sample_.size(); ++i) {
-          const Eigen::Vector2d q = pose.apply(local_points_[static_cast<std::size_t>(sample_[i])]);
+          const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
           double best = threshold2;
           std::int32_t found = -1;
           for (std::int32_t j = candidate_begin_[i]; j < candidate_begin_[i + 1]; ++j) {
@@ -378,8 +431,9 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
   last_pose_ = pose;
   last_stamp_s_ = scan.stamp_s;
   world_points_.resize(local_points_.size());
+  const PoseTransform to_fixed(pose);
   for (std::size_t b = 0; b < local_points_.size(); ++b) {
-    world_points_[b] = std::isfinite(local_points_[b].x()) ? pose.apply(local_points_[b])
+    world_points_[b] = std::isfinite(local_points_[b].x()) ? to_fixed(local_points_[b])
                                                            : Eigen::Vector2d(kNaN, kNaN);
   }
   return pose;
@@ -387,28 +441,35 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
 
 void ScanRegistration::add(const std::vector<char>& keep,
                            const std::function<bool(const Eigen::Vector2d&)>& in_free_space) {
+  explaining_valid_ = false;
   const double max_r2 = config_.max_range_m * config_.max_range_m;
-  const double c = std::cos(last_pose_.yaw_rad), s = std::sin(last_pose_.yaw_rad);
+  const PoseTransform to_fixed(last_pose_);
+  // Consecutive beams mostly fall in the same voxel: it is looked up once for them (a reference
+  // into the map stays valid while others are inserted).
+  Voxel* voxel = nullptr;
+  Key last_key = 0;
   for (std::size_t b = 0; b < world_points_.size() && b < keep.size(); ++b) {
     if (keep[b] == 0 || !std::isfinite(world_points_[b].x())) continue;
     if (local_points_[b].squaredNorm() > max_r2) continue;
-    Voxel& v = map_[key_of(world_points_[b])];
-    if (v.last_scan != scan_count_) {
-      if (v.scans == 0) {
-        v.first_stamp_s = last_stamp_s_;
-        v.in_free_space = in_free_space && in_free_space(world_points_[b]);
-      }
-      ++v.scans;
-      v.last_scan = scan_count_;
-      v.last_stamp_s = last_stamp_s_;
+    const Key key = key_of(world_points_[b]);
+    if (voxel == nullptr || key != last_key) {
+      voxel = &map_[key];
+      last_key = key;
     }
-    if (v.count < config_.max_points_per_voxel) {
-      const Eigen::Vector2d& n = normals_[b];
-      v.points[v.count] = world_points_[b].cast<float>();
-      v.stamps_s[v.count] = last_stamp_s_;
-      v.normals[v.count] =
-          Eigen::Vector2d(c * n.x() - s * n.y(), s * n.x() + c * n.y()).cast<float>();
-      ++v.count;
+    if (voxel->last_scan != scan_count_) {
+      if (voxel->scans == 0) {
+        voxel->first_stamp_s = last_stamp_s_;
+        voxel->in_free_space = in_free_space && in_free_space(world_points_[b]);
+      }
+      ++voxel->scans;
+      voxel->last_scan = scan_count_;
+      voxel->last_stamp_s = last_stamp_s_;
+    }
+    if (voxel->count < config_.max_points_per_voxel) {
+      voxel->points[voxel->count] = world_points_[b].cast<float>();
+      voxel->stamps_s[voxel->count] = last_stamp_s_;
+      voxel->normals[voxel->count] = to_fixed.rotate(normal_at(b)).cast<float>();
+      ++voxel->count;
     }
   }
   // Every tenth scan: forget what lies beyond the local map and the trails of passers-by.

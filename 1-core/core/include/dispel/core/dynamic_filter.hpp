@@ -188,12 +188,13 @@ class DynamicFilter {
 
   // The steps of process(), in order (thesis Figure 3.3).
   ScanCheck check(const LaserScan& scan, const std::optional<Pose2>& sensor_pose);
+  void place_beams(const LaserScan& scan, const Pose2& sensor_pose);
   void observe(const Segmentation& segmentation, const Pose2& sensor_pose, float range_max_m);
   void explain(const LaserScan& scan, const Segmentation& segmentation);
   void match(double stamp_s);
   void update_velocities(double stamp_s);
   void classify(const LaserScan& scan, const Pose2& sensor_pose, const Segmentation& segmentation);
-  void label(const LaserScan& scan, const Pose2& sensor_pose, const ScanCheck& check,
+  void label(const LaserScan& scan, const ScanCheck& check,
              FilterResult& out);
 
   // Step 1.
@@ -207,14 +208,13 @@ class DynamicFilter {
   // Steps 5 and 6.
   void update_class(Track& track, const Observation& obs, double stamp_s);
   void start_tracks(double stamp_s);
-  void mark_objects_in_free_space(const LaserScan& scan, const Pose2& sensor_pose,
-                                  const Segmentation& segmentation);
+  void mark_objects_in_free_space(const LaserScan& scan, const Segmentation& segmentation);
   void spread_to_companions();
   void forget_lost_tracks();
   Track new_track(const Observation& obs, double stamp_s, std::int32_t object_index);
   // Step 7.
   BeamLabel beam_label(const LaserScan& scan, std::size_t b, std::int32_t segment_label,
-                       const Pose2& sensor_pose, bool learned);
+                       bool learned);
   bool near_dynamic_track(const Eigen::Vector2d& point_m, double stamp_s) const;
   void write_tracks(FilterResult& out) const;
 
@@ -225,6 +225,8 @@ class DynamicFilter {
   FreeSpaceMap free_space_;
   ScanRegistration registration_;
   std::vector<char> explained_;                // Per beam of this scan (registration on).
+  BeamDirections directions_;                  // The scanner's beam directions.
+  std::vector<Eigen::Vector2d> beam_points_;   // Per beam of this scan, fixed frame (NaN: invalid).
   std::vector<std::int32_t> explained_count_;  // Scratch: per object.
   std::vector<char> keep_;                     // Scratch: beams the map learns.
   std::optional<Pose2> previous_input_pose_;   // The pose given with the previous scan.

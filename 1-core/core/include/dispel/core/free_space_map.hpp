@@ -88,10 +88,20 @@ class FreeSpaceMap {
     std::int16_t occupied = 0;       // The same, clamped to [0, 2 * long_occupied_scans].
   };
   bool index_of(const Eigen::Vector2d& p, std::int64_t& index) const;
+  /// Cells are stored in square tiles of kTileSide x kTileSide (a beam crosses cells near each
+  /// other in memory, whatever its direction); the index of cell (ix, iy) of the window.
+  static constexpr std::int64_t kTileBits = 3;
+  static constexpr std::int64_t kTileSide = std::int64_t{1} << kTileBits;
+  std::int64_t cell_index(std::int64_t ix, std::int64_t iy) const {
+    constexpr std::int64_t mask = kTileSide - 1;
+    return (((iy >> kTileBits) * tiles_per_side_ + (ix >> kTileBits)) << (2 * kTileBits)) +
+           ((iy & mask) << kTileBits) + (ix & mask);
+  }
   void recenter(const Eigen::Vector2d& center);
 
   FreeSpaceConfig config_;
   std::int64_t cells_per_side_ = 0;
+  std::int64_t tiles_per_side_ = 0;
   Eigen::Vector2d origin_ = Eigen::Vector2d::Zero();  // Corner of the window.
   bool placed_ = false;
   std::uint32_t scans_ = 0;
@@ -99,6 +109,7 @@ class FreeSpaceMap {
   std::vector<Cell> cells_;
   std::vector<double> free_until_;           // Scratch: per beam, how far it saw free space.
   std::vector<Eigen::Vector2d> directions_;  // Scratch: per beam, its direction.
+  BeamDirections beam_directions_;           // The scanner's beam directions (sensor frame).
 };
 
 }  // namespace dispel

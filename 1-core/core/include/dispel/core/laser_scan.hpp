@@ -2,6 +2,8 @@
 /// @file
 /// The 2D laser scan as dispel sees it, and the checks a scan must pass before it is used.
 
+#include <Eigen/Core>
+#include <cmath>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -38,6 +40,32 @@ struct LaserScan {
     const float r = ranges_m[i];
     return r >= range_min_m && r <= range_max_m;  // false for NaN; +inf only if range_max is.
   }
+};
+
+/// The unit vector of each beam's bearing in the sensor frame, computed once for a scanner's
+/// geometry and again only when it changes: (cos, sin) of bearing_rad(i), the same values a
+/// per-beam std::cos and std::sin give.
+class BeamDirections {
+ public:
+  /// The directions for @p scan's geometry (beam count, angle_min_rad, angle_increment_rad).
+  const std::vector<Eigen::Vector2d>& of(const LaserScan& scan) {
+    if (scan.size() != unit_.size() || scan.angle_min_rad != angle_min_rad_ ||
+        scan.angle_increment_rad != angle_increment_rad_) {
+      angle_min_rad_ = scan.angle_min_rad;
+      angle_increment_rad_ = scan.angle_increment_rad;
+      unit_.resize(scan.size());
+      for (std::size_t i = 0; i < scan.size(); ++i) {
+        const double bearing = scan.bearing_rad(i);
+        unit_[i] = Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+      }
+    }
+    return unit_;
+  }
+
+ private:
+  double angle_min_rad_ = 0.0;
+  double angle_increment_rad_ = 0.0;
+  std::vector<Eigen::Vector2d> unit_;
 };
 
 /// What can be wrong with a scan as a whole. A scan with any of these is rejected, never used.

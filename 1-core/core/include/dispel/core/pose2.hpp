@@ -47,4 +47,23 @@ struct Pose2 {
   }
 };
 
+/// A pose's transform with its cosine and sine computed once, for applying it to many points:
+/// the same result as Pose2::apply, bit for bit, without a sine and a cosine per point.
+class PoseTransform {
+ public:
+  explicit PoseTransform(const Pose2& pose)
+      : c_(std::cos(pose.yaw_rad)), s_(std::sin(pose.yaw_rad)), x_(pose.x_m), y_(pose.y_m) {}
+
+  Eigen::Vector2d operator()(const Eigen::Vector2d& p) const {
+    return {c_ * p.x() - s_ * p.y() + x_, s_ * p.x() + c_ * p.y() + y_};
+  }
+  /// The rotation alone (a direction or a normal).
+  Eigen::Vector2d rotate(const Eigen::Vector2d& v) const {
+    return {c_ * v.x() - s_ * v.y(), s_ * v.x() + c_ * v.y()};
+  }
+
+ private:
+  double c_, s_, x_, y_;
+};
+
 }  // namespace dispel

@@ -141,8 +141,9 @@ class ScanRegistration {
   static Key key_at(std::int64_t ix, std::int64_t iy);
   Key key_of(const Eigen::Vector2d& p) const;
   bool structure(const Voxel& v) const;
-  std::int32_t gather_candidates(const Pose2& pose, int reach, bool structure_only);
+  std::int32_t gather_candidates(const Pose2& pose, int reach, double radius, bool structure_only);
   void thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s);
+  Eigen::Vector2d normal_at(std::size_t b) const;
 
   RegistrationConfig config_;
   std::unordered_map<Key, Voxel> map_;
@@ -160,12 +161,17 @@ class ScanRegistration {
   // Per scan.
   std::vector<Eigen::Vector2d> local_points_;  // Per beam, de-skewed, in the sensor frame.
   std::vector<Eigen::Vector2d> world_points_;  // Per beam, in the fixed frame.
-  std::vector<Eigen::Vector2d> normals_;       // Per beam, sensor frame (zero if none).
+  BeamDirections directions_;                  // The scanner's beam directions.
   std::vector<std::int32_t> sample_;           // Beams used for registration.
   // Candidate map points of each sampled point (gathered once per registration).
   std::vector<std::int32_t> candidate_begin_;
+  std::vector<const Voxel*> neighbourhood_;  // Scratch: the voxels around a sample point.
   std::vector<Eigen::Vector2d> candidate_points_;
   std::vector<Eigen::Vector2d> candidate_normals_;
+  // explained(): the voxels that can explain points of one voxel, kept for the next beam.
+  mutable std::vector<const Voxel*> explaining_;
+  mutable bool explaining_valid_ = false;
+  mutable std::int64_t explaining_ix_ = 0, explaining_iy_ = 0;
 };
 
 }  // namespace dispel

@@ -27,7 +27,7 @@
 ///
 /// The whole log is read and decoded when it is opened and held in memory, as the recording
 /// model's messages: about 1.6 kB per scan of 361 beams (4 bytes a range plus the message's
-/// fields), about 100 bytes per odometry message. MRPT's own objects are not kept.
+/// fields), a few hundred bytes per odometry or mount message. MRPT's own objects are not kept.
 
 #include <cstdint>
 #include <map>

@@ -13,7 +13,11 @@ packages=(
   libtf2-msgs-dev                      # ROS 1 bags (the real bag library, no ROS install needed)
   python3-rosbag                       # tests: bags we write must read in Python and rosbag info
   libcairo2-dev libfontconfig-dev      # dispel render, eval --plot: PNG and SVG pictures (Cairo)
-  libmrpt-slam-dev libmrpt-maps-dev libmrpt-obs-dev  # dispel::slam: MRPT's ICP-SLAM (tests)
+  libmrpt-slam-dev libmrpt-maps-dev libmrpt-obs-dev  # dispel::slam: MRPT's ICP-SLAM (tests);
+                                       # dispel::io_mrpt_rawlog: MRPT rawlogs
+  zlib1g-dev                           # io_mrpt_rawlog: gzip-compressed rawlogs, checked whole
+  mrpt-common                          # tests and docs/results.md: MRPT's datasets, among them
+                                       # the SENA wheelchair log (one loop of a building)
   pkg-config libroscpp-dev libtf2-ros-dev libvisualization-msgs-dev libdiagnostic-msgs-dev
                                        # ROS 1 nodes (ros1/, -DDISPEL_WITH_ROS1=ON)
   python3-rosmaster python3-roslaunch python3-rosparam tf2-tools

@@ -4,6 +4,7 @@ removed, against people annotations or against the recording's persistent backgr
 
 usage: /usr/bin/python3 tools/recording_eval.py FILTERED.bag --scan-topic TOPIC
            [--people TOPIC] [--person-radius M] [--json]
+           [--cell M] [--min-scans N] [--min-span S]
 
 FILTERED.bag is `dispel filter`'s output (it has TOPIC_labels, and TOPIC_pose when the
 registration is on). Beams labelled invalid (4) are not counted.
@@ -15,7 +16,9 @@ registration is on). Beams labelled invalid (4) are not counted.
   share of person beams removed and of background beams kept.
 Without --people: background beams end in a 0.1 m cell of the registered frame (TOPIC_pose)
   that beams of at least 20 scans hit, the first and the last at least 10 s apart: structure that
-  persisted. Prints the share of all valid beams removed and of background beams kept."""
+  persisted (--cell, --min-scans, --min-span change 0.1, 20 and 10: a short or fast recording
+  sees a place for fewer scans). Prints the share of all valid beams removed and of background
+  beams kept."""
 import json, math, sys
 import rosbag
 
@@ -40,7 +43,12 @@ def main():
     else:
         if topic + '_pose' not in topics:
             sys.exit('%s: no %s_pose (the background needs the registered poses)' % (path, topic))
-        result.update(background(bag, topic))
+        def option(name, default):
+            return float(args[args.index(name) + 1]) if name in args else default
+        rule = {'cell': option('--cell', 0.1), 'min_scans': int(option('--min-scans', 20)),
+                'min_span_s': option('--min-span', 10.0)}
+        result.update(rule)
+        result.update(background(bag, topic, **rule))
     if '--json' in args:
         print(json.dumps(result, indent=2))
     else:

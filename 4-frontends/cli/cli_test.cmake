@@ -106,11 +106,20 @@ if(NOT total EQUAL 1265 OR NOT processed EQUAL 1265 OR NOT dynamic GREATER 10000
   message(FATAL_ERROR "bad statistics: ${stats}")
 endif()
 
-# Ctrl-C: either interrupted with nothing written, or already done with a complete bag.
-file(REMOVE ${out})
-execute_process(COMMAND timeout --preserve-status -s INT 0.2 ${DISPEL} filter ${BAG} -o ${out} --static-sensor
-                        --compression bz2
-                RESULT_VARIABLE rc OUTPUT_VARIABLE so ERROR_VARIABLE se)
+# Ctrl-C: either interrupted with nothing written, or already done with a complete bag. A signal
+# that comes while the program is still loading its shared libraries (MRPT's, for rawlogs, take
+# about 0.1 s; more on a busy machine) ends it before its handler is installed, silently: then
+# the run is repeated with a later signal.
+foreach(delay 0.2 0.5 1.0 2.0)
+  file(REMOVE ${out})
+  execute_process(COMMAND timeout --preserve-status -s INT ${delay} ${DISPEL} filter ${BAG} -o ${out}
+                          --static-sensor --compression bz2
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE so ERROR_VARIABLE se)
+  if(NOT (rc EQUAL 130 AND se STREQUAL "" AND so STREQUAL "" AND NOT EXISTS ${out}
+          AND NOT EXISTS ${out}.partial))
+    break()
+  endif()
+endforeach()
 if(EXISTS ${out}.partial)
   message(FATAL_ERROR "an interrupted run left ${out}.partial")
 endif()

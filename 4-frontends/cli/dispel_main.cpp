@@ -47,8 +47,11 @@ int main(int argc, char** argv) {
   dispel::apps::FilterCommandOptions filter;
   std::string config_path;
   CLI::App* filter_cmd = app.add_subcommand(
-      "filter", "Remove moving objects from the scans of a recording (ROS 1 bag or CARMEN log)");
-  filter_cmd->add_option("input", filter.job.input, "IN.bag, or a CARMEN .log/.clf")->required();
+      "filter",
+      "Remove moving objects from the scans of a recording (ROS 1 bag, MRPT rawlog or CARMEN log)");
+  filter_cmd
+      ->add_option("input", filter.job.input, "IN.bag, an MRPT IN.rawlog, or a CARMEN .log/.clf")
+      ->required();
   filter_cmd->add_option("-o,--output", filter.job.output, "OUT.bag to write")->required();
   filter_cmd->add_option("--config", config_path, "YAML configuration (see config/default.yaml)");
   filter_cmd->add_option("--scan-topic", filter.job.scan_topic, "LaserScan topic")
@@ -94,7 +97,7 @@ int main(int argc, char** argv) {
   double render_from = 0.0, render_to = 0.0;
   CLI::App* render_cmd = app.add_subcommand(
       "render", "Draw a recording (filtered or not) as a map of all scans or one scan's objects");
-  render_cmd->add_option("input", render.job.input, "IN.bag")->required();
+  render_cmd->add_option("input", render.job.input, "IN.bag or an MRPT IN.rawlog")->required();
   render_cmd->add_option("-o,--output", render.job.output, "OUT.png or OUT.svg to write")
       ->required();
   render_cmd->add_option("--view", render.job.view, "map (all scans) or scan (one scan)")

@@ -14,7 +14,8 @@ void add_slam_commands(CLI::App& app, SlamCli& cli) {
   cli.slam_cmd = app.add_subcommand(
       "slam", "Run MRPT's ICP-SLAM over a recording's scans and odometry; write its trajectory");
   cli.slam_cmd
-      ->add_option("input", cli.slam.job.input, "IN.bag (raw, or filtered by dispel filter)")
+      ->add_option("input", cli.slam.job.input,
+                   "IN.bag or an MRPT IN.rawlog (raw, or a bag filtered by dispel filter)")
       ->required();
   cli.slam_cmd->add_option("-o,--output", cli.slam.output, "TRAJECTORY.csv to write (t,x,y,yaw)")
       ->required();

@@ -1,7 +1,7 @@
 # Fails when a source file includes what its layer may not (docs/architecture.md, "The layers"):
 # a dispel header of a layer above it, or a library its room must not use (the core: no ROS, no
-# files, no printing; the formats' and jobs' rooms: no bag library outside io_ros1_bags; the ROS 1
-# nodes: no bags and no jobs). Tests (*_test.cpp) may use any room of their layer and below, and
+# files, no printing; the formats' and jobs' rooms: no bag library outside io_ros1_bags, no MRPT
+# outside io_mrpt_rawlog and slam; the ROS 1 nodes: no bags, no rawlogs and no jobs). Tests (*_test.cpp) may use any room of their layer and below, and
 # the real libraries they check against.
 #
 #   cmake -DSOURCE_DIR=<repository> [-DMIN_FILES=100] -P check_layers.cmake
@@ -13,9 +13,10 @@ set(rooms
   "1-core/sim|core sim|ros/ rosbag/ yaml-cpp/ iostream fstream cstdio cairo"
   "1-core/eval|core eval|ros/ rosbag/ yaml-cpp/ iostream fstream cstdio cairo"
   "1-core/pipeline|core pipeline|ros/ rosbag/ yaml-cpp/ iostream fstream cstdio cairo"
-  "2-formats/io|core sim eval pipeline io|ros/ rosbag/ sensor_msgs/ nav_msgs/ tf2_msgs/ cairo"
-  "2-formats/ros1_messages|core sim eval pipeline io|rosbag/ cairo"
-  "2-formats/ros1_bags|core sim eval pipeline io|cairo"
+  "2-formats/io|core sim eval pipeline io|ros/ rosbag/ sensor_msgs/ nav_msgs/ tf2_msgs/ cairo mrpt/"
+  "2-formats/ros1_messages|core sim eval pipeline io|rosbag/ cairo mrpt/"
+  "2-formats/ros1_bags|core sim eval pipeline io|cairo mrpt/"
+  "2-formats/mrpt_rawlog|core sim eval pipeline io|ros/ rosbag/ sensor_msgs/ nav_msgs/ tf2_msgs/ cairo"
   "3-jobs/jobs|core sim eval pipeline io jobs|ros/ rosbag/ sensor_msgs/ nav_msgs/ tf2_msgs/ cairo mrpt/"
   "3-jobs/render|core sim eval pipeline io jobs render|ros/ rosbag/ sensor_msgs/ mrpt/"
   "3-jobs/slam|core sim eval pipeline io jobs slam|ros/ rosbag/ sensor_msgs/ cairo"
@@ -24,7 +25,7 @@ set(rooms
   "4-frontends/bench|core sim eval pipeline|ros/ rosbag/")
 # Headers of a room that a room above may not use even though its layer is below (the ROS 1 bag
 # library is for the jobs' recordings, not for a live node).
-set(ros1_forbidden_headers "dispel/io/ros1_bag.hpp")
+set(ros1_forbidden_headers "dispel/io/ros1_bag.hpp" "dispel/io/mrpt_rawlog.hpp")
 
 set(layer_of_room_core 1)
 set(layer_of_room_sim 1)

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <limits>
 
+#include "dispel/io/errors.hpp"
+
 namespace dispel::io {
 
 Stamp Stamp::from_seconds(double seconds) {
@@ -60,6 +62,35 @@ std::string join_names(const std::vector<std::string>& names) {
   std::string s;
   for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
   return s.empty() ? std::string("none") : s;
+}
+
+void write_decoded(RecordingWriter& writer, const RecordedMessage& message) {
+  const std::string& topic = message.topic();
+  const Stamp time = message.time();
+  // A message that does not decode as its kind says is passed over: a reader gives std::nullopt
+  // only for a message of another kind (or ROS 1's instantiate() for a type it cannot match).
+  switch (message.kind()) {
+    case MessageKind::kLaserScan:
+      if (const auto m = message.scan()) writer.write(topic, time, *m);
+      return;
+    case MessageKind::kOdometry:
+      if (const auto m = message.odometry()) writer.write(topic, time, *m);
+      return;
+    case MessageKind::kTransforms:
+      if (const auto m = message.transforms()) writer.write(topic, time, *m);
+      return;
+    case MessageKind::kJointState:
+      if (const auto m = message.joint_state()) writer.write(topic, time, *m);
+      return;
+    case MessageKind::kImu:
+      if (const auto m = message.imu()) writer.write(topic, time, *m);
+      return;
+    case MessageKind::kNavSatFix:
+    case MessageKind::kOther:
+      break;
+  }
+  throw OutputError(topic + ": cannot copy a message of type " + message_kind_name(message.kind()) +
+                    " from another format (only the recording model's types can be converted)");
 }
 
 ScanMessage scan_message(const LaserScan& scan, const std::string& frame_id) {

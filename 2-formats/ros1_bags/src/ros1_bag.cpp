@@ -202,8 +202,16 @@ Ros1BagWriter::~Ros1BagWriter() {
 
 void Ros1BagWriter::copy(const RecordedMessage& message) {
   const auto* m = dynamic_cast<const Ros1Message*>(&message);
-  if (m == nullptr) {
-    throw OutputError(impl_->path + ": a ROS 1 bag can copy only messages of a ROS 1 bag");
+  if (m == nullptr) {  // Another format's message: written from its decoded form.
+    try {
+      write_decoded(*this, message);
+    } catch (const OutputError& e) {
+      const std::string what = e.what();
+      // write() names the bag already; write_decoded's own error names only the topic.
+      if (what.rfind(impl_->path + ":", 0) == 0) throw;
+      throw OutputError(impl_->path + ": " + what);
+    }
+    return;  // write() counted it.
   }
   const rosbag::MessageInstance& i = m->instance();
   impl_->writing([&] { impl_->bag.write(i.getTopic(), i.getTime(), i, i.getConnectionHeader()); });

@@ -1,4 +1,6 @@
 // Messages written with the real ROS bag library come back unchanged, with every compression.
+#include "dispel/io/ros1_bag.hpp"
+
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
@@ -12,6 +14,7 @@
 #include <cstdio>
 #include <string>
 
+#include "dispel/io/errors.hpp"
 #include "dispel/io/ros1_messages.hpp"
 
 namespace dispel::io {
@@ -126,6 +129,92 @@ TEST_P(BagRoundTrip, EveryMessageComesBackUnchanged) {
 INSTANTIATE_TEST_SUITE_P(Compressions, BagRoundTrip,
                          ::testing::Values(rosbag::compression::Uncompressed,
                                            rosbag::compression::BZ2, rosbag::compression::LZ4));
+
+// --- Messages of another format, copied decoded (write_decoded) ------------------------------
+
+// A message of a format that is not a ROS 1 bag (as an MRPT rawlog's are), decoded already.
+class ForeignMessage final : public RecordedMessage {
+ public:
+  ForeignMessage(std::string topic, MessageKind kind, Stamp time)
+      : topic_(std::move(topic)), kind_(kind), time_(time) {}
+  std::optional<ScanMessage> scan_message;
+  std::optional<OdometryMessage> odometry_message;
+  std::optional<TransformsMessage> transforms_message;
+
+  const std::string& topic() const override { return topic_; }
+  MessageKind kind() const override { return kind_; }
+  Stamp time() const override { return time_; }
+  std::optional<ScanMessage> scan() const override { return scan_message; }
+  std::optional<OdometryMessage> odometry() const override { return odometry_message; }
+  std::optional<TransformsMessage> transforms() const override { return transforms_message; }
+  std::optional<JointStateMessage> joint_state() const override { return std::nullopt; }
+  std::optional<ImuMessage> imu() const override { return std::nullopt; }
+  std::optional<NavSatFixMessage> nav_sat_fix() const override { return std::nullopt; }
+
+ private:
+  std::string topic_;
+  MessageKind kind_;
+  Stamp time_;
+};
+
+TEST(Ros1BagWriter, CopiesAnotherFormatsMessagesDecoded) {
+  const std::string path = ::testing::TempDir() + "/foreign_copied.bag";
+  const Recorded r = sample(3);
+  {
+    Ros1BagWriter writer(path, BagCompression::kNone);
+    ForeignMessage scan("/front", MessageKind::kLaserScan, Stamp{20, 500});
+    scan.scan_message = to_message(r.scan);
+    ForeignMessage odom("/odom", MessageKind::kOdometry, Stamp{21, 0});
+    odom.odometry_message = to_message(r.odom);
+    ForeignMessage mount("/tf_static", MessageKind::kTransforms, Stamp{19, 0});
+    mount.transforms_message = to_message(r.tf);
+    writer.copy(mount);
+    writer.copy(scan);
+    writer.copy(odom);
+    EXPECT_EQ(writer.messages_written(), 3);
+    writer.finish();
+  }
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  std::map<std::string, int> seen;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+    ++seen[m.getTopic()];
+    if (m.getTopic() == "/front") {
+      const auto s = m.instantiate<sensor_msgs::LaserScan>();
+      ASSERT_TRUE(s);
+      EXPECT_EQ(m.getTime(), ros::Time(20, 500));  // The message's receive time.
+      EXPECT_EQ(s->ranges.size(), r.scan.ranges.size());
+      EXPECT_EQ(s->ranges[10], r.scan.ranges[10]);
+    } else if (m.getTopic() == "/odom") {
+      const auto o = m.instantiate<nav_msgs::Odometry>();
+      ASSERT_TRUE(o);
+      EXPECT_EQ(o->child_frame_id, "base_link");
+      EXPECT_NEAR(o->pose.pose.position.x, 0.3, 1e-12);
+    } else {
+      const auto tf = m.instantiate<tf2_msgs::TFMessage>();
+      ASSERT_TRUE(tf);
+      ASSERT_EQ(tf->transforms.size(), 1u);
+      EXPECT_EQ(tf->transforms[0].child_frame_id, "laser");
+    }
+  }
+  EXPECT_EQ(seen.size(), 3u);
+  std::remove(path.c_str());
+}
+
+TEST(Ros1BagWriter, RefusesAnotherFormatsMessageItCannotDecodeNamingTheTopic) {
+  const std::string path = ::testing::TempDir() + "/foreign_refused.bag";
+  Ros1BagWriter writer(path, BagCompression::kNone);
+  const ForeignMessage other("/camera", MessageKind::kOther, Stamp{1, 0});
+  try {
+    writer.copy(other);
+    ADD_FAILURE() << "copied";
+  } catch (const OutputError& e) {
+    EXPECT_STREQ(e.what(),
+                 (path + ": /camera: cannot copy a message of type other from another format "
+                         "(only the recording model's types can be converted)")
+                     .c_str());
+  }
+  EXPECT_EQ(writer.messages_written(), 0);
+}
 
 }  // namespace
 }  // namespace dispel::io

@@ -7,6 +7,9 @@
 
 #include "dispel/io/errors.hpp"
 #include "dispel/io/ros1_bag.hpp"
+#ifdef DISPEL_HAVE_MRPT_RAWLOG
+#include "dispel/io/mrpt_rawlog.hpp"
+#endif
 
 namespace dispel::jobs {
 
@@ -32,7 +35,23 @@ void rethrow_as_job_error() {
   }
 }
 
+namespace {
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
 std::unique_ptr<io::RecordingReader> open_recording(const std::string& path) {
+  if (ends_with(path, ".rawlog") || ends_with(path, ".rawlog.gz")) {
+#ifdef DISPEL_HAVE_MRPT_RAWLOG
+    return as_job([&] { return std::make_unique<io::MrptRawlogReader>(path); });
+#else
+    throw JobError(path + ": this dispel was built without MRPT rawlogs (DISPEL_WITH_MRPT_RAWLOG)");
+#endif
+  }
   return as_job([&] { return std::make_unique<io::Ros1BagReader>(path); });
 }
 

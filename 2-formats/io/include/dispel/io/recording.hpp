@@ -198,6 +198,13 @@ class RecordingWriter {
   std::int64_t written_ = 0;
 };
 
+/// Writes @p message through @p writer's typed write(), decoded by its kind, at its receive time:
+/// how a writer copies a message of another format (a ROS 1 bag writer given an MRPT rawlog's
+/// scan, say). @throws OutputError naming the topic for a kind the writer has no write() for
+/// (kNavSatFix, kOther: their bytes mean nothing outside their own format); InputError when the
+/// message cannot be decoded.
+void write_decoded(RecordingWriter& writer, const RecordedMessage& message);
+
 /// A scan message for a scan of the core (the simulator's, a CARMEN log's): the header stamped
 /// with scan.stamp_s in @p frame_id, angle_max from the beam count, no stated period.
 ScanMessage scan_message(const LaserScan& scan, const std::string& frame_id);

@@ -41,7 +41,8 @@ class Ros1BagWriter final : public RecordingWriter {
   /// Without finish(), nothing is left behind (and nothing is thrown).
   ~Ros1BagWriter() override;
 
-  /// @p message must come from a Ros1BagReader: its bytes and connection header are copied.
+  /// A message of a Ros1BagReader: its bytes and connection header are copied. A message of
+  /// another format is written decoded (write_decoded): OutputError for a kind it cannot decode.
   void copy(const RecordedMessage& message) override;
   void write(const std::string& topic, Stamp time, const ScanMessage& message) override;
   void write(const std::string& topic, Stamp time, const OdometryMessage& message) override;

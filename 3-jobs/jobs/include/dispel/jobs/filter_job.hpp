@@ -1,8 +1,8 @@
 #pragma once
 /// @file
-/// `dispel filter`: the dynamic filter over a recording (a ROS 1 bag or a CARMEN log), written
-/// as a bag with every input message plus the filtered scans and their labels. The scans go
-/// through pipeline::ScanFilterRunner, as in the nodes.
+/// `dispel filter`: the dynamic filter over a recording (a ROS 1 bag, an MRPT rawlog or a CARMEN
+/// log), written as a bag with every input message plus the filtered scans and their labels. The
+/// scans go through pipeline::ScanFilterRunner, as in the nodes.
 
 #include <atomic>
 #include <cstdint>
@@ -18,7 +18,7 @@
 namespace dispel::jobs {
 
 struct FilterJobOptions {
-  std::string input;                          ///< .bag, or .log / .clf (CARMEN).
+  std::string input;                          ///< .bag, .rawlog (MRPT), or .log / .clf (CARMEN).
   std::string output;                         ///< The bag to write.
   std::optional<std::string> config_path;     ///< YAML; DynamicFilterConfig{} without it.
   std::optional<DynamicFilterConfig> config;  ///< Used instead of config_path when given.
@@ -36,7 +36,7 @@ struct FilterJobOptions {
 /// What the job did.
 struct FilterJobStats {
   bool laser_only = false;          ///< Filtered without odometry (registered scans only).
-  std::string input_format;         ///< "rosbag" or "carmen".
+  std::string input_format;         ///< "rosbag", "MRPT rawlog" or "carmen".
   std::int64_t messages_in = 0;     ///< Messages (bag) or lines (CARMEN) read.
   std::int64_t messages_out = 0;    ///< Messages written.
   std::int64_t scans = 0;           ///< Scans seen.

@@ -34,8 +34,10 @@ void check_cancelled(const std::atomic<bool>* cancel);
 /// @throws JobError "<path>: <reason>" unless @p path is a regular file that exists.
 void check_input_file(const std::string& path);
 
-/// Opens a recording by its file: a ROS 1 bag. @throws JobError "<path>: not a readable ROS 1 bag
-/// (...)" (a missing file too: callers that want "No such file" say so first, check_input_file)
+/// Opens a recording by its file's name: an MRPT rawlog for ".rawlog" or ".rawlog.gz" (plain or
+/// gzip-compressed), a ROS 1 bag otherwise. @throws JobError "<path>: not a readable ROS 1 bag
+/// (...)" or "<path>: not a readable MRPT rawlog (...)" (a missing file too: callers that want "No
+/// such file" say so first, check_input_file)
 std::unique_ptr<io::RecordingReader> open_recording(const std::string& path);
 
 /// How a recording is written.

@@ -1,0 +1,383 @@
+#include "dispel/io/mrpt_rawlog.hpp"
+
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CActionRobotMovement2D.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/obs/CRawlog.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/serialization/CArchive.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <variant>
+
+#include "dispel/io/errors.hpp"
+
+namespace dispel::io {
+namespace {
+
+// MRPT's time stamps count 100 ns since 1601-01-01 (mrpt::Clock); the Unix epoch is this many.
+constexpr std::int64_t kTicksPerSecond = 10000000;
+constexpr std::int64_t kUnixEpochTicks = 116444736000000000;
+
+bool has_stamp(const mrpt::Clock::time_point& t) { return t != mrpt::Clock::time_point(); }
+
+Stamp to_stamp(const mrpt::Clock::time_point& t) {
+  const std::int64_t ticks = t.time_since_epoch().count() - kUnixEpochTicks;
+  std::int64_t sec = ticks / kTicksPerSecond;
+  std::int64_t rest = ticks % kTicksPerSecond;
+  if (rest < 0) {
+    rest += kTicksPerSecond;
+    --sec;
+  }
+  return {sec, static_cast<std::uint32_t>(rest * 100)};
+}
+
+// The innermost "Message:" line of an MRPT exception (its text is several lines, with a call
+// stack), or the first line of any other; printable characters only (a garbage file's bytes end
+// up in MRPT's messages).
+std::string one_line(const std::exception& e) {
+  const std::string text = e.what();
+  std::string line;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    std::string l = text.substr(start, end - start);
+    const std::size_t m = l.find("Message:");
+    if (m != std::string::npos) {
+      line = l.substr(m + 8);
+    } else if (line.empty() && l.find("====") == std::string::npos &&
+               l.find_first_not_of(" \t") != std::string::npos) {
+      line = l;
+    }
+    start = end + 1;
+  }
+  line.erase(0, std::min(line.find_first_not_of(" \t"), line.size()));
+  for (char& c : line) {
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7F) c = '?';
+  }
+  constexpr std::size_t kMax = 200;
+  if (line.size() > kMax) line = line.substr(0, kMax) + "...";
+  return line.empty() ? std::string("unknown error") : line;
+}
+
+// The file's bytes, uncompressed when it is gzip-compressed (zlib reads a plain file as it is).
+std::string read_file(const std::string& path) {
+  {
+    const std::ifstream probe(path, std::ios::binary);
+    if (!probe) throw InputError(path + ": cannot open (" + std::strerror(errno) + ")");
+  }
+  gzFile f = gzopen(path.c_str(), "rb");
+  if (f == nullptr) throw InputError(path + ": cannot open (" + std::strerror(errno) + ")");
+  std::string bytes;
+  char buffer[1 << 16];
+  int n = 0;
+  while ((n = gzread(f, buffer, sizeof buffer)) > 0) bytes.append(buffer, static_cast<size_t>(n));
+  int code = Z_OK;
+  const std::string message = gzerror(f, &code);
+  gzclose(f);
+  if (n < 0 || (code != Z_OK && code != Z_STREAM_END)) {
+    throw InputError(path + ": not a readable MRPT rawlog (the gzip stream " +
+                     (code == Z_BUF_ERROR ? std::string("ends early: the file is truncated")
+                                          : "is corrupt: " + message) +
+                     ")");
+  }
+  return bytes;
+}
+
+// A topic's name from an MRPT sensor label: letters, digits and '_' kept, others '_'.
+std::string sanitised(const std::string& label) {
+  std::string s = label;
+  for (char& c : s) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9');
+    if (!ok) c = '_';
+  }
+  return s;
+}
+
+ScanMessage scan_message_of(const mrpt::obs::CObservation2DRangeScan& s, const Stamp& stamp,
+                            const std::string& frame, std::uint32_t seq) {
+  ScanMessage m;
+  m.header = {seq, stamp, frame};
+  const std::size_t n = s.getScanSize();
+  const double aperture = static_cast<double>(s.aperture);
+  LaserScan& scan = m.scan;
+  scan.stamp_s = stamp.seconds();
+  scan.angle_min_rad = -aperture / 2.0;
+  scan.angle_increment_rad = n > 1 ? aperture / static_cast<double>(n - 1) : 0.0;
+  scan.range_min_m = 0.0F;
+  scan.range_max_m = s.maxRange;
+  scan.ranges_m.resize(n);
+  if (s.hasIntensity()) scan.intensities.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    // Right to left: beam k is at angle_min + k * increment. Otherwise the beams are mirrored:
+    // MRPT's beam k is at +aperture/2 - k * increment, our beam n-1-k.
+    const std::size_t i = s.rightToLeft ? k : n - 1 - k;
+    scan.ranges_m[k] =
+        s.getScanRangeValidity(i) ? s.getScanRange(i) : std::numeric_limits<float>::quiet_NaN();
+    if (s.hasIntensity()) scan.intensities[k] = static_cast<float>(s.getScanIntensity(i));
+  }
+  m.angle_max = static_cast<float>(n > 1 ? aperture / 2.0 : scan.angle_min_rad);
+  return m;
+}
+
+using Payload = std::variant<ScanMessage, OdometryMessage, TransformsMessage>;
+
+struct Entry {
+  std::string topic;
+  MessageKind kind;
+  Stamp time;
+  Payload payload;
+};
+
+// One message of a rawlog, decoded already.
+class RawlogMessage final : public RecordedMessage {
+ public:
+  explicit RawlogMessage(const Entry& e) : e_(e) {}
+  const std::string& topic() const override { return e_.topic; }
+  MessageKind kind() const override { return e_.kind; }
+  Stamp time() const override { return e_.time; }
+  std::optional<ScanMessage> scan() const override { return get<ScanMessage>(); }
+  std::optional<OdometryMessage> odometry() const override { return get<OdometryMessage>(); }
+  std::optional<TransformsMessage> transforms() const override { return get<TransformsMessage>(); }
+  std::optional<JointStateMessage> joint_state() const override { return std::nullopt; }
+  std::optional<ImuMessage> imu() const override { return std::nullopt; }
+  std::optional<NavSatFixMessage> nav_sat_fix() const override { return std::nullopt; }
+
+ private:
+  template <typename T>
+  std::optional<T> get() const {
+    if (const auto* p = std::get_if<T>(&e_.payload)) return *p;
+    return std::nullopt;
+  }
+  const Entry& e_;
+};
+
+constexpr const char* kOdomTopic = "/odom";
+constexpr const char* kMountTopic = "/tf_static";
+
+// Turns the rawlog's objects, in file order, into entries.
+class Converter {
+ public:
+  explicit Converter(std::vector<Entry>& entries, std::map<std::string, std::int64_t>& skipped)
+      : entries_(entries), skipped_(skipped) {}
+
+  void object(const mrpt::serialization::CSerializable::Ptr& obj) {
+    if (auto actions = std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(obj)) {
+      for (std::size_t i = 0; i < actions->size(); ++i) action(actions->get(i));
+    } else if (auto frame = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj)) {
+      sensory_frame(*frame);
+    } else if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj)) {
+      observation(o);
+    } else if (auto log = std::dynamic_pointer_cast<mrpt::obs::CRawlog>(obj)) {
+      for (std::size_t i = 0; i < log->size(); ++i) object(log->getAsGeneric(i));  // Saved whole.
+    } else {
+      skip(*obj);
+    }
+  }
+
+  // Odometry increments still without a stamp at the end of the log are stamped with the last
+  // stamp seen (there is no later sensory frame).
+  void finish() {
+    if (pending_ && last_stamp_) odometry_at(*last_stamp_);
+  }
+
+ private:
+  void skip(const mrpt::rtti::CObject& o) { ++skipped_[o.GetRuntimeClass()->className]; }
+
+  void action(const mrpt::obs::CAction::Ptr& a) {
+    const auto move = std::dynamic_pointer_cast<mrpt::obs::CActionRobotMovement2D>(a);
+    if (!move) {
+      skip(*a);
+      return;
+    }
+    if (pending_) {  // The previous action had no stamp and no sensory frame came since.
+      pending_ = false;
+      if (last_stamp_) odometry_at(*last_stamp_);
+    }
+    // The robot is at the identity where the log starts: state it at the first observation when
+    // that comes before the first action (its scan then has a pose).
+    if (!integrating_ && first_observation_) {
+      odometry_entry(*first_observation_, Pose2{}, 0.0, 0.0);
+    }
+    integrating_ = true;
+    const mrpt::poses::CPose2D d = move->poseChange->getMeanVal();
+    pose_ = pose_ * Pose2{d.x(), d.y(), d.phi()};
+    v_ = move->hasVelocities ? move->velocityLocal.vx : 0.0;
+    w_ = move->hasVelocities ? move->velocityLocal.omega : 0.0;
+    pending_ = true;
+    if (has_stamp(move->timestamp)) odometry_at(to_stamp(move->timestamp));
+  }
+
+  void sensory_frame(const mrpt::obs::CSensoryFrame& frame) {
+    std::optional<Stamp> earliest;
+    for (const auto& o : frame) {
+      if (o && has_stamp(o->timestamp)) {
+        const Stamp s = to_stamp(o->timestamp);
+        if (!earliest || s < *earliest) earliest = s;
+      }
+    }
+    if (pending_ && earliest) odometry_at(*earliest);
+    for (const auto& o : frame) {
+      if (o) observation(o);
+    }
+  }
+
+  void observation(const mrpt::obs::CObservation::Ptr& o) {
+    if (!has_stamp(o->timestamp)) {
+      ++skipped_[std::string(o->GetRuntimeClass()->className) + " without a time stamp"];
+      return;
+    }
+    const Stamp stamp = to_stamp(o->timestamp);
+    last_stamp_ = stamp;
+    if (!first_observation_) first_observation_ = stamp;
+    if (auto scan = std::dynamic_pointer_cast<mrpt::obs::CObservation2DRangeScan>(o)) {
+      laser(*scan, stamp);
+    } else if (auto odom = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(o)) {
+      const mrpt::poses::CPose2D& p = odom->odometry;
+      odometry_entry(stamp, Pose2{p.x(), p.y(), p.phi()},
+                     odom->hasVelocities ? odom->velocityLocal.vx : 0.0,
+                     odom->hasVelocities ? odom->velocityLocal.omega : 0.0);
+    } else {
+      skip(*o);
+    }
+  }
+
+  void laser(const mrpt::obs::CObservation2DRangeScan& s, const Stamp& stamp) {
+    const std::string name = s.sensorLabel.empty() ? std::string() : sanitised(s.sensorLabel);
+    const std::string topic = "/" + (name.empty() ? std::string("scan") : name);
+    const std::string frame = name.empty() ? std::string("laser") : name;
+    const Pose2 mount{s.sensorPose.x(), s.sensorPose.y(), s.sensorPose.yaw()};
+    const auto known = mounts_.find(frame);
+    if (known == mounts_.end() || known->second.x_m != mount.x_m ||
+        known->second.y_m != mount.y_m || known->second.yaw_rad != mount.yaw_rad) {
+      mounts_[frame] = mount;
+      TransformsMessage tf;
+      tf.transforms.push_back({stamp, "base_link", frame, mount});
+      entries_.push_back({kMountTopic, MessageKind::kTransforms, stamp, std::move(tf)});
+    }
+    entries_.push_back(
+        {topic, MessageKind::kLaserScan, stamp, scan_message_of(s, stamp, frame, seq_[topic]++)});
+  }
+
+  void odometry_at(const Stamp& stamp) {
+    pending_ = false;
+    odometry_entry(stamp, pose_, v_, w_);
+  }
+
+  void odometry_entry(const Stamp& stamp, const Pose2& pose, double v, double w) {
+    OdometryMessage m;
+    m.header = {seq_[kOdomTopic]++, stamp, "odom"};
+    m.child_frame_id = "base_link";
+    m.pose = pose;
+    m.v_mps = v;
+    m.w_radps = w;
+    entries_.push_back({kOdomTopic, MessageKind::kOdometry, stamp, std::move(m)});
+  }
+
+  std::vector<Entry>& entries_;
+  std::map<std::string, std::int64_t>& skipped_;
+  std::map<std::string, Pose2> mounts_;  // By frame: the last mount stated.
+  std::map<std::string, std::uint32_t> seq_;
+  Pose2 pose_;  // The integrated odometry.
+  double v_ = 0.0, w_ = 0.0;
+  bool integrating_ = false;
+  bool pending_ = false;  // pose_ has an increment not yet stated (its action had no stamp).
+  std::optional<Stamp> first_observation_, last_stamp_;
+};
+
+}  // namespace
+
+struct MrptRawlogReader::Impl {
+  std::string path;
+  std::vector<Entry> entries;
+  Topics topics;
+  std::map<std::string, std::int64_t> skipped;
+  std::int64_t skipped_count = 0;
+};
+
+MrptRawlogReader::MrptRawlogReader(const std::string& path) : impl_(std::make_unique<Impl>()) {
+  impl_->path = path;
+  const std::string bytes = read_file(path);
+  mrpt::io::CMemoryStream stream;
+  stream.assignMemoryNotOwn(bytes.data(), bytes.size());
+  auto archive = mrpt::serialization::archiveFrom(stream);
+  Converter converter(impl_->entries, impl_->skipped);
+  std::int64_t objects = 0;
+  // The log ends where the bytes end: an error reading an object that starts before is a
+  // truncated or corrupt log.
+  while (stream.getPosition() < bytes.size()) {
+    mrpt::serialization::CSerializable::Ptr obj;
+    try {
+      obj = archive.ReadObject();
+    } catch (const std::exception& e) {
+      throw InputError(
+          path + ": not a readable MRPT rawlog (" +
+          (objects == 0 ? std::string()
+                        : "truncated or corrupt after " + std::to_string(objects) + " objects: ") +
+          one_line(e) + ")");
+    }
+    if (!obj) {
+      throw InputError(path + ": not a readable MRPT rawlog (a null object after " +
+                       std::to_string(objects) + " objects)");
+    }
+    ++objects;
+    converter.object(obj);
+  }
+  if (objects == 0) throw InputError(path + ": not a readable MRPT rawlog (the file is empty)");
+  converter.finish();
+
+  std::stable_sort(impl_->entries.begin(), impl_->entries.end(),
+                   [](const Entry& a, const Entry& b) { return a.time < b.time; });
+  std::map<std::string, TopicInfo> topics;
+  for (const Entry& e : impl_->entries) {
+    TopicInfo& info = topics[e.topic];
+    info.type = message_kind_name(e.kind);
+    info.kind = e.kind;
+    ++info.messages;
+  }
+  impl_->topics = Topics(std::move(topics));
+  for (const auto& [name, count] : impl_->skipped) impl_->skipped_count += count;
+}
+
+MrptRawlogReader::~MrptRawlogReader() = default;
+
+const std::string& MrptRawlogReader::path() const { return impl_->path; }
+const Topics& MrptRawlogReader::topics() const { return impl_->topics; }
+
+Stamp MrptRawlogReader::begin_time() const {
+  return impl_->entries.empty() ? Stamp{} : impl_->entries.front().time;
+}
+
+Stamp MrptRawlogReader::end_time() const {
+  return impl_->entries.empty() ? Stamp{} : impl_->entries.back().time;
+}
+
+void MrptRawlogReader::read(const std::vector<std::string>& topics,
+                            const std::function<void(const RecordedMessage&)>& visit) {
+  const std::set<std::string> wanted(topics.begin(), topics.end());
+  for (const Entry& e : impl_->entries) {
+    if (!wanted.empty() && wanted.count(e.topic) == 0) continue;
+    try {
+      visit(RawlogMessage(e));
+    } catch (const StopReading&) {
+      return;
+    }
+  }
+}
+
+const std::map<std::string, std::int64_t>& MrptRawlogReader::skipped() const {
+  return impl_->skipped;
+}
+
+std::int64_t MrptRawlogReader::skipped_count() const { return impl_->skipped_count; }
+
+}  // namespace dispel::io

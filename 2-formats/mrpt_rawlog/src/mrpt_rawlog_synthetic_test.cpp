@@ -1,0 +1,169 @@
+// Rawlogs written here with MRPT itself, for what Debian's wheelchair log does not hold: labelled
+// lasers scanning left to right, absolute odometry observations, actions without time stamps, a
+// mount that changes, and observations of other classes.
+#include <gtest/gtest.h>
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/io/CFileOutputStream.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CActionRobotMovement2D.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservationComment.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <cmath>
+
+#include "dispel/io/mrpt_rawlog.hpp"
+#include "test_files.hpp"
+
+namespace dispel::io {
+namespace {
+
+using test::temp_path;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kT0 = 1700000000.25;  // Seconds since the Unix epoch.
+
+mrpt::obs::CObservation2DRangeScan::Ptr laser(const std::string& label, double t,
+                                              bool right_to_left, double mount_x) {
+  auto s = mrpt::obs::CObservation2DRangeScan::Create();
+  s->sensorLabel = label;
+  s->timestamp = mrpt::Clock::fromDouble(t);
+  s->aperture = static_cast<float>(kPi);
+  s->rightToLeft = right_to_left;
+  s->maxRange = 30.0F;
+  s->sensorPose = mrpt::poses::CPose3D(mount_x, 0.1, 0.2, 0.5, 0.0, 0.0);
+  s->resizeScan(5);
+  for (std::size_t k = 0; k < 5; ++k) {
+    s->setScanRange(k, 1.0F + static_cast<float>(k));  // Beam k at 1 + k metres.
+    s->setScanRangeValidity(k, k != 1);
+  }
+  return s;
+}
+
+std::map<std::string, std::vector<std::pair<Stamp, std::string>>> read_all(
+    MrptRawlogReader& reader, std::vector<ScanMessage>* scans = nullptr,
+    std::vector<OdometryMessage>* odometry = nullptr,
+    std::vector<TransformsMessage>* mounts = nullptr) {
+  std::map<std::string, std::vector<std::pair<Stamp, std::string>>> seen;
+  reader.read({}, [&](const RecordedMessage& m) {
+    seen[m.topic()].emplace_back(m.time(), message_kind_name(m.kind()));
+    if (auto s = m.scan(); s && scans) scans->push_back(*s);
+    if (auto o = m.odometry(); o && odometry) odometry->push_back(*o);
+    if (auto t = m.transforms(); t && mounts) mounts->push_back(*t);
+  });
+  return seen;
+}
+
+// Observations only (the newer format): two lasers, absolute odometry, a comment, all in one
+// gzip-compressed file, the second laser's observations given out of time order.
+TEST(MrptRawlogSynthetic, ObservationsFormatWithLabelledLeftToRightLasers) {
+  const std::string path = temp_path("observations.rawlog");
+  {
+    mrpt::io::CFileGZOutputStream out(path);
+    auto archive = mrpt::serialization::archiveFrom(out);
+    auto comment = mrpt::obs::CObservationComment::Create();
+    comment->timestamp = mrpt::Clock::fromDouble(kT0);
+    comment->text = "a comment";
+    archive << *comment;
+    for (int k = 0; k < 3; ++k) {
+      auto odom = mrpt::obs::CObservationOdometry::Create();
+      odom->timestamp = mrpt::Clock::fromDouble(kT0 + 0.1 * k);
+      odom->odometry = mrpt::poses::CPose2D(0.5 * k, 0.0, 0.1 * k);
+      odom->hasVelocities = true;
+      odom->velocityLocal = mrpt::math::TTwist2D(5.0, 0.0, 1.0);
+      archive << *odom;
+      // The mount of the front laser moves once, at k = 2.
+      archive << *laser("LASER front.1", kT0 + 0.1 * k + 0.05, false, k < 2 ? 0.3 : 0.4);
+    }
+    archive << *laser("", kT0 + 0.02, true, 0.0);  // Earlier than the messages before it.
+  }
+  MrptRawlogReader reader(path);
+  std::vector<ScanMessage> scans;
+  std::vector<OdometryMessage> odometry;
+  std::vector<TransformsMessage> mounts;
+  const auto seen = read_all(reader, &scans, &odometry, &mounts);
+  EXPECT_EQ(reader.skipped_count(), 1);
+  EXPECT_EQ(reader.skipped().at("mrpt::obs::CObservationComment"), 1);
+  ASSERT_EQ(seen.size(), 4u);
+  EXPECT_EQ(seen.at("/LASER_front_1").size(), 3u);
+  EXPECT_EQ(seen.at("/scan").size(), 1u);
+  EXPECT_EQ(seen.at("/odom").size(), 3u);
+  EXPECT_EQ(seen.at("/tf_static").size(), 3u);  // Each laser's first mount, and the change.
+  EXPECT_EQ(reader.topics().all().at("/LASER_front_1").type, "sensor_msgs/LaserScan");
+  EXPECT_NEAR(reader.begin_time().seconds(), kT0, 1e-6);
+  EXPECT_NEAR(reader.end_time().seconds(), kT0 + 0.25, 1e-6);
+
+  ASSERT_EQ(scans.size(), 4u);
+  EXPECT_EQ(scans[0].header.frame_id, "laser");  // The unlabelled one, by its stamp.
+  EXPECT_NEAR(scans[0].scan.stamp_s, kT0 + 0.02, 1e-6);
+  const ScanMessage& front = scans[1];
+  EXPECT_EQ(front.header.frame_id, "LASER_front_1");
+  EXPECT_NEAR(front.scan.angle_min_rad, -kPi / 2, 1e-6);
+  EXPECT_NEAR(front.scan.angle_increment_rad, kPi / 4, 1e-6);
+  EXPECT_EQ(front.scan.range_max_m, 30.0F);
+  // Left to right: MRPT's beam 0 is at +90°, our last beam; MRPT's beam 1 (invalid) our beam 3.
+  EXPECT_EQ(front.scan.ranges_m[4], 1.0F);
+  EXPECT_TRUE(std::isnan(front.scan.ranges_m[3]));
+  EXPECT_EQ(front.scan.ranges_m[0], 5.0F);
+  // Right to left: as MRPT has them.
+  EXPECT_EQ(scans[0].scan.ranges_m[0], 1.0F);
+  EXPECT_TRUE(std::isnan(scans[0].scan.ranges_m[1]));
+
+  ASSERT_EQ(odometry.size(), 3u);
+  EXPECT_EQ(odometry[2].pose.x_m, 1.0);
+  EXPECT_NEAR(odometry[2].pose.yaw_rad, 0.2, 1e-12);
+  EXPECT_EQ(odometry[2].v_mps, 5.0);
+  EXPECT_EQ(odometry[2].w_radps, 1.0);
+
+  ASSERT_EQ(mounts.size(), 3u);
+  EXPECT_EQ(mounts[0].transforms[0].child, "laser");
+  EXPECT_EQ(mounts[1].transforms[0].child, "LASER_front_1");
+  EXPECT_NEAR(mounts[1].transforms[0].child_in_parent.x_m, 0.3, 1e-6);
+  EXPECT_NEAR(mounts[1].transforms[0].child_in_parent.y_m, 0.1, 1e-6);
+  EXPECT_NEAR(mounts[1].transforms[0].child_in_parent.yaw_rad, 0.5, 1e-6);
+  EXPECT_NEAR(mounts[2].transforms[0].child_in_parent.x_m, 0.4, 1e-6);
+  EXPECT_NEAR(mounts[2].transforms[0].stamp.seconds(), kT0 + 0.25, 1e-6);
+}
+
+// Actions and sensory frames without time stamps on the actions: each integrated pose is stamped
+// with the next sensory frame's earliest observation, the last one with the last stamp seen.
+TEST(MrptRawlogSynthetic, ActionsWithoutStampsTakeTheNextSensoryFrames) {
+  const std::string path = temp_path("actions.rawlog");
+  {
+    mrpt::io::CFileOutputStream out(path);  // Uncompressed.
+    auto archive = mrpt::serialization::archiveFrom(out);
+    mrpt::obs::CActionRobotMovement2D::TMotionModelOptions model;
+    for (int k = 0; k < 3; ++k) {
+      mrpt::obs::CSensoryFrame frame;
+      frame.insert(laser("front", kT0 + k, true, 0.3));
+      archive << frame;
+      mrpt::obs::CActionRobotMovement2D move;
+      move.computeFromOdometry(mrpt::poses::CPose2D(1.0, 0.0, kPi / 2), model);
+      mrpt::obs::CActionCollection actions;
+      actions.insert(move);
+      archive << actions;
+    }
+  }
+  MrptRawlogReader reader(path);
+  std::vector<OdometryMessage> odometry;
+  const auto seen = read_all(reader, nullptr, &odometry);
+  EXPECT_EQ(seen.at("/front").size(), 3u);
+  ASSERT_EQ(odometry.size(), 4u);  // The identity at the first scan, and one per action.
+  EXPECT_EQ(odometry[0].pose.x_m, 0.0);
+  EXPECT_NEAR(odometry[0].header.stamp.seconds(), kT0, 1e-6);
+  // One metre forward then a quarter turn left, three times.
+  EXPECT_NEAR(odometry[1].pose.x_m, 1.0, 1e-9);
+  EXPECT_NEAR(odometry[2].pose.x_m, 1.0, 1e-9);
+  EXPECT_NEAR(odometry[2].pose.y_m, 1.0, 1e-9);
+  EXPECT_NEAR(odometry[3].pose.x_m, 0.0, 1e-9);
+  EXPECT_NEAR(odometry[3].pose.y_m, 1.0, 1e-9);
+  EXPECT_NEAR(std::remainder(odometry[3].pose.yaw_rad + kPi / 2, 2 * kPi), 0.0, 1e-9);
+  EXPECT_NEAR(odometry[1].header.stamp.seconds(), kT0 + 1, 1e-6);
+  EXPECT_NEAR(odometry[2].header.stamp.seconds(), kT0 + 2, 1e-6);
+  EXPECT_NEAR(odometry[3].header.stamp.seconds(), kT0 + 2, 1e-6);  // No frame after it.
+}
+
+}  // namespace
+}  // namespace dispel::io

@@ -1,0 +1,220 @@
+#include "dispel/io/mrpt_rawlog.hpp"
+
+#include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "dispel/io/errors.hpp"
+#include "test_files.hpp"
+
+namespace dispel::io {
+namespace {
+
+using test::temp_path;
+using test::write_text;
+
+// Debian's mrpt-common: a wheelchair driving one loop of the Telecom faculty building (Malaga,
+// 2006-01-21), one SICK laser with no label, odometry as actions (scripts/setup.sh installs it).
+const std::string kSena = DISPEL_MRPT_SENA_RAWLOG;
+constexpr double kPi = 3.14159265358979323846;
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
+// The log's bytes uncompressed (Debian ships it gzip-compressed).
+std::string uncompressed(const std::string& path) {
+  gzFile f = gzopen(path.c_str(), "rb");
+  std::string bytes;
+  char buffer[4096];
+  int n = 0;
+  while (f != nullptr && (n = gzread(f, buffer, sizeof buffer)) > 0) {
+    bytes.append(buffer, static_cast<std::size_t>(n));
+  }
+  if (f != nullptr) gzclose(f);
+  return bytes;
+}
+
+// The InputError of opening @p path (empty when it opens).
+std::string open_error(const std::string& path) {
+  try {
+    MrptRawlogReader reader(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return {};
+}
+
+class MrptRawlogSena : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(test::exists(kSena))
+        << kSena << ": install Debian's mrpt-common (scripts/setup.sh)";
+  }
+};
+
+TEST_F(MrptRawlogSena, OpensWithTheScansOdometryAndMountItHolds) {
+  MrptRawlogReader reader(kSena);
+  EXPECT_EQ(reader.format_name(), "MRPT rawlog");
+  EXPECT_EQ(reader.path(), kSena);
+  const Topics& topics = reader.topics();
+  EXPECT_EQ(topics.all().size(), 3u);
+  ASSERT_TRUE(topics.has("/scan", MessageKind::kLaserScan));
+  ASSERT_TRUE(topics.has("/odom", MessageKind::kOdometry));
+  ASSERT_TRUE(topics.has("/tf_static", MessageKind::kTransforms));
+  EXPECT_EQ(topics.all().at("/scan").type, "sensor_msgs/LaserScan");
+  EXPECT_EQ(topics.all().at("/odom").type, "nav_msgs/Odometry");
+  EXPECT_EQ(topics.messages("/scan"), 225);
+  // 224 actions, and the identity at the first scan (which comes before the first action).
+  EXPECT_EQ(topics.messages("/odom"), 225);
+  EXPECT_EQ(topics.messages("/tf_static"), 1);  // The mount never changes.
+  EXPECT_EQ(reader.skipped_count(), 0);
+  // 2006-01-21 09:03:45.713 UTC, about a minute.
+  EXPECT_NEAR(reader.begin_time().seconds(), 1137834225.713, 0.001);
+  EXPECT_NEAR(reader.end_time().seconds() - reader.begin_time().seconds(), 59.1, 0.1);
+}
+
+TEST_F(MrptRawlogSena, ScansFollowMrptsBeamConventionWithInvalidBeamsNaN) {
+  MrptRawlogReader reader(kSena);
+  std::int64_t scans = 0, invalid = 0, beams = 0;
+  Stamp last;
+  bool mount_before_scan = false;
+  reader.read({}, [&](const RecordedMessage& m) {
+    EXPECT_FALSE(m.time() < last) << "messages out of time order at " << m.time().seconds();
+    last = m.time();
+    if (m.kind() == MessageKind::kTransforms && scans == 0) mount_before_scan = true;
+    if (m.kind() != MessageKind::kLaserScan) return;
+    const auto s = m.scan();
+    ASSERT_TRUE(s);
+    EXPECT_FALSE(m.odometry());
+    ++scans;
+    EXPECT_EQ(s->header.frame_id, "laser");
+    EXPECT_EQ(s->header.stamp, m.time());
+    EXPECT_DOUBLE_EQ(s->scan.stamp_s, m.time().seconds());
+    ASSERT_EQ(s->scan.size(), 361u);
+    EXPECT_NEAR(s->scan.angle_min_rad, -kPi / 2, 1e-6);
+    EXPECT_NEAR(s->scan.angle_increment_rad, kPi / 360, 1e-6);
+    EXPECT_NEAR(s->angle_max, kPi / 2, 1e-6);
+    EXPECT_EQ(s->scan.range_min_m, 0.0F);
+    EXPECT_EQ(s->scan.range_max_m, 80.0F);
+    for (std::size_t i = 0; i < s->scan.size(); ++i) {
+      ++beams;
+      if (!s->scan.is_valid(i)) {
+        ++invalid;
+        EXPECT_TRUE(std::isnan(s->scan.ranges_m[i]));
+      }
+    }
+  });
+  EXPECT_TRUE(mount_before_scan);
+  EXPECT_EQ(scans, 225);
+  // The first scan has 52 beams flagged invalid (MRPT's validity flags); about 14 % overall.
+  EXPECT_GT(invalid, 0);
+  EXPECT_LT(invalid, beams / 4);
+}
+
+TEST_F(MrptRawlogSena, OdometryMovesAboutOneLoopAndTheMountIsTheSicksPose) {
+  MrptRawlogReader reader(kSena);
+  std::vector<OdometryMessage> odometry;
+  std::vector<TransformsMessage> mounts;
+  reader.read({"/odom", "/tf_static"}, [&](const RecordedMessage& m) {
+    EXPECT_NE(m.topic(), "/scan");
+    if (auto o = m.odometry()) odometry.push_back(*o);
+    if (auto t = m.transforms()) mounts.push_back(*t);
+  });
+  ASSERT_EQ(odometry.size(), 225u);
+  EXPECT_EQ(odometry.front().header.frame_id, "odom");
+  EXPECT_EQ(odometry.front().child_frame_id, "base_link");
+  EXPECT_EQ(odometry.front().pose.x_m, 0.0);
+  double path = 0.0;
+  for (std::size_t k = 1; k < odometry.size(); ++k) {
+    EXPECT_FALSE(odometry[k].header.stamp < odometry[k - 1].header.stamp);
+    path += std::hypot(odometry[k].pose.x_m - odometry[k - 1].pose.x_m,
+                       odometry[k].pose.y_m - odometry[k - 1].pose.y_m);
+  }
+  // The increments sum to 76.4 m in 59 s (a wheelchair at 1.3 m/s around the building).
+  EXPECT_NEAR(path, 76.4, 1.0);
+  ASSERT_EQ(mounts.size(), 1u);
+  ASSERT_EQ(mounts[0].transforms.size(), 1u);
+  const FrameTransform& mount = mounts[0].transforms[0];
+  EXPECT_EQ(mount.parent, "base_link");
+  EXPECT_EQ(mount.child, "laser");
+  EXPECT_NEAR(mount.child_in_parent.x_m, 0.78, 1e-6);  // A float in MRPT.
+  EXPECT_NEAR(mount.child_in_parent.y_m, 0.0, 1e-9);
+  EXPECT_NEAR(mount.child_in_parent.yaw_rad, 0.0, 1e-9);
+}
+
+TEST_F(MrptRawlogSena, ReadingStopsWhenTheVisitorSaysSo) {
+  MrptRawlogReader reader(kSena);
+  int visits = 0;
+  reader.read({"/scan"}, [&](const RecordedMessage&) {
+    if (++visits == 3) throw StopReading();
+  });
+  EXPECT_EQ(visits, 3);
+}
+
+TEST_F(MrptRawlogSena, AnUncompressedCopyReadsTheSame) {
+  const std::string plain = write_text("sena_plain.rawlog", uncompressed(kSena));
+  MrptRawlogReader reader(plain);
+  EXPECT_EQ(reader.topics().messages("/scan"), 225);
+  EXPECT_EQ(reader.topics().messages("/odom"), 225);
+}
+
+// --- What is not a rawlog ---------------------------------------------------------------------
+
+void expect_unreadable(const std::string& path, const std::string& why) {
+  const std::string error = open_error(path);
+  EXPECT_EQ(error.rfind(path + ": not a readable MRPT rawlog (", 0), 0u) << why << ": " << error;
+  EXPECT_EQ(error.find('\n'), std::string::npos) << why << ": " << error;
+}
+
+TEST(MrptRawlogReader, MissingFileIsAnInputErrorNamingIt) {
+  const std::string error = open_error("/nonexistent/sena.rawlog");
+  EXPECT_EQ(error, "/nonexistent/sena.rawlog: cannot open (No such file or directory)");
+}
+
+TEST(MrptRawlogReader, EmptyTextAndGarbageFilesAreNotRawlogs) {
+  expect_unreadable(write_text("empty.rawlog", ""), "empty");
+  expect_unreadable(write_text("text.rawlog", "hello, I am not a rawlog\n"), "text");
+  std::string garbage;
+  for (int i = 0; i < 5000; ++i) garbage += static_cast<char>((i * 7919 + 13) % 251);
+  expect_unreadable(write_text("garbage.rawlog", garbage), "garbage");
+}
+
+TEST_F(MrptRawlogSena, TruncatedCompressedCopiesAreRefused) {
+  const std::string bytes = file_bytes(kSena);
+  ASSERT_GT(bytes.size(), 100000u);
+  for (const std::size_t cut :
+       {std::size_t{10}, std::size_t{100}, std::size_t{5000}, bytes.size() / 2, bytes.size() - 1}) {
+    const std::string path =
+        write_text("cut_gz_" + std::to_string(cut) + ".rawlog", bytes.substr(0, cut));
+    expect_unreadable(path, "compressed, cut at " + std::to_string(cut));
+  }
+}
+
+TEST_F(MrptRawlogSena, TruncatedOrCorruptUncompressedCopiesAreRefused) {
+  const std::string bytes = uncompressed(kSena);
+  ASSERT_GT(bytes.size(), 400000u);
+  for (const std::size_t cut :
+       {std::size_t{1}, std::size_t{3}, std::size_t{250000}, bytes.size() - 1}) {
+    const std::string path =
+        write_text("cut_plain_" + std::to_string(cut) + ".rawlog", bytes.substr(0, cut));
+    expect_unreadable(path, "uncompressed, cut at " + std::to_string(cut));
+  }
+}
+
+// Bytes changed in a compressed log fail gzip's check. (An uncompressed log has no check: a
+// changed range is read as that range.)
+TEST_F(MrptRawlogSena, CorruptCompressedCopyIsRefused) {
+  std::string bytes = file_bytes(kSena);
+  for (std::size_t i = bytes.size() / 2; i < bytes.size() / 2 + 64; ++i) bytes[i] = '\xA5';
+  expect_unreadable(write_text("corrupt.rawlog", bytes), "corrupt");
+}
+
+}  // namespace
+}  // namespace dispel::io

@@ -179,7 +179,8 @@ DynamicFilter::ScanCheck DynamicFilter::check(const LaserScan& scan,
   } else if (dt > config_.max_time_gap_s) {
     reset();
     c.event = FilterEvent::kResetTimeGap;
-  } else if (moved > config_.max_pose_jump_m || turned > config_.max_pose_jump_rad) {
+  } else if (moved > config_.max_pose_jump_m + config_.max_speed_mps * dt ||
+             turned > config_.max_pose_jump_rad + config_.max_turn_rate_radps * dt) {
     reset();
     c.event = FilterEvent::kResetPoseJump;
   }

@@ -44,6 +44,10 @@ void DynamicFilterConfig::validate() const {
   if (!(max_time_gap_s > 0.0)) reject_field("max_time_gap_s", max_time_gap_s, "> 0");
   if (!(max_pose_jump_m > 0.0)) reject_field("max_pose_jump_m", max_pose_jump_m, "> 0");
   if (!(max_pose_jump_rad > 0.0)) reject_field("max_pose_jump_rad", max_pose_jump_rad, "> 0");
+  if (!(max_speed_mps >= 0.0 && max_speed_mps <= 100.0))
+    reject_field("max_speed_mps", max_speed_mps, "in [0, 100]");
+  if (!(max_turn_rate_radps >= 0.0 && max_turn_rate_radps <= 100.0))
+    reject_field("max_turn_rate_radps", max_turn_rate_radps, "in [0, 100]");
 }
 
 DynamicFilterConfig thesis_config() {

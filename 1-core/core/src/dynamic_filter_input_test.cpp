@@ -88,6 +88,27 @@ TEST(DynamicFilterInput, PoseJumpResetsInsteadOfMakingTheWorldMove) {
   }
 }
 
+// A slow scanner on a robot driving fast moves farther than max_pose_jump_m between two scans:
+// that is motion (up to max_speed_mps), not a jump; a jump beyond it still resets.
+TEST(DynamicFilterInput, ASlowScannerOnAFastRobotIsMotionNotAJump) {
+  Scenario s;
+  s.walls = room(30.0, 6.0);
+  s.pillars = {{{2.0, 2.0}, 0.3}, {{12.0, -2.0}, 0.3}};
+  s.sensor = [](double t) { return Pose2{-12.0 + 1.3 * t, 0.0, 0.0}; };  // 1.3 m/s.
+  DynamicFilter filter{DynamicFilterConfig{}};
+  constexpr double kSlowPeriod = 0.5;  // A 2 Hz scanner: 0.65 m between scans.
+  for (int k = 0; k < 20; ++k) {
+    const Frame f = render(s, k * kSlowPeriod);
+    const FilterResult r = filter.process(f.scan, f.pose);
+    EXPECT_EQ(r.event, k == 0 ? FilterEvent::kFirstScan : FilterEvent::kFiltered) << "scan " << k;
+  }
+  EXPECT_EQ(filter.counters().events[static_cast<int>(FilterEvent::kResetPoseJump)], 0);
+  // 3 m in 0.5 s is beyond 0.5 m + 3 m/s * 0.5 s: a jump.
+  const Frame f = render(s, 20 * kSlowPeriod);
+  const FilterResult r = filter.process(f.scan, Pose2{f.pose.x_m + 3.0, 0.0, 0.0});
+  EXPECT_EQ(r.event, FilterEvent::kResetPoseJump);
+}
+
 TEST(DynamicFilterInput, NonFinitePoseAndBadScansPassThroughUnchanged) {
   Scenario s;
   s.walls = room(6.0, 5.0);

@@ -75,6 +75,8 @@ void RegistrationConfig::validate() const {
     reject("registration.odometry_noise_rad", odometry_noise_rad, "> 0");
   if (!(constant_velocity_noise_m > 0.0))
     reject("registration.constant_velocity_noise_m", constant_velocity_noise_m, "> 0");
+  if (!(velocity_smoothing > 0.0 && velocity_smoothing <= 1.0))
+    reject("registration.velocity_smoothing", velocity_smoothing, "in (0, 1]");
   if (!(constant_velocity_noise_rad > 0.0))
     reject("registration.constant_velocity_noise_rad", constant_velocity_noise_rad, "> 0");
   if (!(explained_distance_m > 0.0 && explained_distance_m <= voxel_size_m))
@@ -90,6 +92,7 @@ void ScanRegistration::reset() {
   have_previous_ = false;
   previous_odometry_.reset();
   velocity_per_s_ = Pose2{};
+  velocity_per_s_initialised_ = false;
 }
 
 ScanRegistration::Key ScanRegistration::key_at(std::int64_t ix, std::int64_t iy) {
@@ -422,7 +425,14 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
   }
   if (have_previous_ && dt > 0.0) {
     const Pose2 moved = previous_pose_.inverse() * pose;
-    velocity_per_s_ = {moved.x_m / dt, moved.y_m / dt, moved.yaw_rad / dt};
+    // Smoothed: one scan's registered motion is noisy (a few cm in a fraction of a second), and a
+    // constant-velocity guess that follows the noise overshoots, and the next correction with it
+    // (it diverged along a corridor at 1 m/s).
+    const double a = velocity_per_s_initialised_ ? config_.velocity_smoothing : 1.0;
+    velocity_per_s_ = {a * moved.x_m / dt + (1.0 - a) * velocity_per_s_.x_m,
+                       a * moved.y_m / dt + (1.0 - a) * velocity_per_s_.y_m,
+                       a * moved.yaw_rad / dt + (1.0 - a) * velocity_per_s_.yaw_rad};
+    velocity_per_s_initialised_ = true;
   }
   previous_pose_ = pose;
   previous_stamp_s_ = scan.stamp_s;

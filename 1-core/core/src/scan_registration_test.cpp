@@ -87,15 +87,15 @@ Errors run(const sim::SimulationOutput& out, const sim::Scenario& s, bool with_o
 // The registration on the simulator, 100 s around the office loop (100 m at 1 m/s). The issue's
 // targets: relative pose error over 1 s below 1 cm and 0.2 degrees, less drift than the wheel
 // odometry's, laser-only within twice the odometry-seeded error. Measured seeded: 1.7 cm and
-// 0.197 degrees over 1 s, 0.10 m after 100 m (wheel odometry: 12 m): the 1 cm target is not
-// reached. Laser-only diverges here (the constant-velocity seed oscillates along the corridor and
-// the oscillation grows: README "Results", an open problem); it is printed, not asserted, and held
-// to its targets where it works: a slower robot in a room (dynamic_filter_input_test) and the
-// real negative_2 recording (filter_job_test).
+// 0.19 degrees over 1 s, 0.17 m after 100 m (wheel odometry: 12 m): the 1 cm target is not
+// reached. Laser-only: 0.16 m and 0.27 degrees over 1 s, 2.1 m after 100 m: far better than the
+// wheel odometry, but not within twice the seeded error (the corridor's length is poorly
+// constrained and the constant-velocity guess holds its error there).
 TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
   const sim::Scenario s = office_loop(100.0);
   const sim::SimulationOutput out = sim::simulate(s, 1);
   const Errors seeded = run(out, s, true);
+  const Errors laser_only_loop = run(out, s, false);
   // The wheel odometry's own drift over the same path.
   const Pose2 o0 = out.sensors.front().odom_pose, o1 = out.sensors.back().odom_pose;
   const Pose2 t0 = out.sensors.front().true_pose, t1 = out.sensors.back().true_pose;
@@ -106,17 +106,27 @@ TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
   EXPECT_LT(seeded.relative_1s_m, 0.02);
   EXPECT_LT(seeded.relative_1s_rad, 0.25 * kDeg);
   EXPECT_LT(seeded.final_m, 0.1 * odometry_final_m);
+  // Laser-only, the same loop: measured 0.16 m and 0.27 degrees over 1 s, 2.1 m after 100 m.
+  // Its constant-velocity guess without smoothing oscillated along the corridor and diverged
+  // (2.8 m over 1 s in the first 20 s). Bounds with room for another build's rounding: the
+  // registration amplifies a last-digit difference along a corridor.
+  EXPECT_GE(laser_only_loop.registered, scans - scans / 50);
+  EXPECT_LT(laser_only_loop.relative_1s_m, 0.4);
+  EXPECT_LT(laser_only_loop.relative_1s_rad, 1.0 * kDeg);
+  EXPECT_LT(laser_only_loop.final_m, 0.5 * odometry_final_m);
 
   const sim::Scenario straight = office_loop(20.0);
   const sim::SimulationOutput first = sim::simulate(straight, 1);
   const Errors seeded_straight = run(first, straight, true);
   const Errors laser_only = run(first, straight, false);
   EXPECT_GE(seeded_straight.registered, static_cast<int>(first.scans.size()) - 5);
+  EXPECT_LT(laser_only.relative_1s_m, 0.4);
   std::printf(
-      "loop, relative 1 s: seeded %.4f m %.3f deg; after %.0f s seeded %.3f m, wheel "
-      "odometry %.3f m. First 20 s: seeded %.4f m %.3f deg, laser-only %.4f m %.3f deg, "
-      "end %.3f / %.3f m\n",
-      seeded.relative_1s_m, seeded.relative_1s_rad / kDeg, s.duration_s, seeded.final_m,
+      "loop, relative 1 s: seeded %.4f m %.3f deg, laser-only %.4f m %.3f deg; after %.0f s "
+      "seeded %.3f m, laser-only %.3f m, wheel odometry %.3f m. First 20 s: seeded %.4f m %.3f "
+      "deg, laser-only %.4f m %.3f deg, end %.3f / %.3f m\n",
+      seeded.relative_1s_m, seeded.relative_1s_rad / kDeg, laser_only_loop.relative_1s_m,
+      laser_only_loop.relative_1s_rad / kDeg, s.duration_s, seeded.final_m, laser_only_loop.final_m,
       odometry_final_m, seeded_straight.relative_1s_m, seeded_straight.relative_1s_rad / kDeg,
       laser_only.relative_1s_m, laser_only.relative_1s_rad / kDeg, seeded_straight.final_m,
       laser_only.final_m);

@@ -198,6 +198,7 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   b.number("registration.odometry_noise_rad", g.odometry_noise_rad);
   b.number("registration.constant_velocity_noise_m", g.constant_velocity_noise_m);
   b.number("registration.constant_velocity_noise_rad", g.constant_velocity_noise_rad);
+  b.number("registration.velocity_smoothing", g.velocity_smoothing);
   b.number("registration.degeneracy_ratio", g.degeneracy_ratio);
   b.integer("registration.explained_min_scans", g.explained_min_scans);
   b.number("registration.explained_min_span_s", g.explained_min_span_s);
@@ -208,6 +209,8 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   b.number("max_time_gap_s", c.max_time_gap_s);
   b.number("max_pose_jump_m", c.max_pose_jump_m);
   b.number("max_pose_jump_rad", c.max_pose_jump_rad);
+  b.number("max_speed_mps", c.max_speed_mps);
+  b.number("max_turn_rate_radps", c.max_turn_rate_radps);
 }
 
 }  // namespace

@@ -70,6 +70,8 @@ void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d
   EXPECT_EQ(loaded.max_time_gap_s, d.max_time_gap_s);
   EXPECT_EQ(loaded.max_pose_jump_m, d.max_pose_jump_m);
   EXPECT_EQ(loaded.max_pose_jump_rad, d.max_pose_jump_rad);
+  EXPECT_EQ(loaded.max_speed_mps, d.max_speed_mps);
+  EXPECT_EQ(loaded.max_turn_rate_radps, d.max_turn_rate_radps);
 }
 
 TEST(ConfigYaml, ShippedDefaultFileHoldsExactlyTheDefaults) {
@@ -164,12 +166,13 @@ TEST(ConfigYaml, TopLevelKeysAreThoseTheParserAccepts) {
   EXPECT_EQ(keys,
             (std::set<std::string>{"preset", "odometry", "segmentation", "tracking", "velocity",
                                    "classification", "free_space", "registration", "max_time_gap_s",
-                                   "max_pose_jump_m", "max_pose_jump_rad"}));
+                                   "max_pose_jump_m", "max_pose_jump_rad", "max_speed_mps",
+                                   "max_turn_rate_radps"}));
   // Each of them is accepted...
   for (const char* text :
        {"segmentation: {}", "tracking: {}", "velocity: {}", "classification: {}", "free_space: {}",
         "registration: {}", "max_time_gap_s: 1.0", "max_pose_jump_m: 1.0", "max_pose_jump_rad: 1.0",
-        "preset: thesis", "odometry: {model: ct}"}) {
+        "max_speed_mps: 2.0", "max_turn_rate_radps: 2.0", "preset: thesis", "odometry: {model: ct}"}) {
     EXPECT_NO_THROW(parse_filter_config(text, "t.yaml")) << text;
   }
   // ...and anything else is not.

@@ -184,11 +184,9 @@ class Converter {
     }
   }
 
-  // Odometry increments still without a stamp at the end of the log are stamped with the last
-  // stamp seen (there is no later sensory frame).
-  void finish() {
-    if (pending_ && last_stamp_) odometry_at(*last_stamp_);
-  }
+  // An odometry increment with no sensory frame after it (the end of the log) is stated at its
+  // action's stamp, or the last stamp seen.
+  void finish() { state_pending(); }
 
  private:
   void skip(const mrpt::rtti::CObject& o) { ++skipped_[o.GetRuntimeClass()->className]; }
@@ -199,10 +197,7 @@ class Converter {
       skip(*a);
       return;
     }
-    if (pending_) {  // The previous action had no stamp and no sensory frame came since.
-      pending_ = false;
-      if (last_stamp_) odometry_at(*last_stamp_);
-    }
+    state_pending();  // The previous action, when no sensory frame came since.
     // The robot is at the identity where the log starts: state it at the first observation when
     // that comes before the first action (its scan then has a pose).
     if (!integrating_ && first_observation_) {
@@ -213,8 +208,24 @@ class Converter {
     pose_ = pose_ * Pose2{d.x(), d.y(), d.phi()};
     v_ = move->hasVelocities ? move->velocityLocal.vx : 0.0;
     w_ = move->hasVelocities ? move->velocityLocal.omega : 0.0;
+    // MRPT's actions-observations convention: an action is the robot's motion from the previous
+    // sensory frame to the next one (what CMetricMapBuilder::processActionObservation composes
+    // before it inserts that frame), so the pose it leads to is the next frame's. Its own stamp
+    // (MRPT's grabber puts it half-way between the two frames) would put the pose half a scan
+    // early: 0.1 m at 1 m/s on Debian's wheelchair log.
     pending_ = true;
-    if (has_stamp(move->timestamp)) odometry_at(to_stamp(move->timestamp));
+    pending_stamp_.reset();
+    if (has_stamp(move->timestamp)) pending_stamp_ = to_stamp(move->timestamp);
+  }
+
+  void state_pending() {
+    if (!pending_) return;
+    if (pending_stamp_) {
+      odometry_at(*pending_stamp_);
+    } else if (last_stamp_) {
+      odometry_at(*last_stamp_);
+    }
+    pending_ = false;
   }
 
   void sensory_frame(const mrpt::obs::CSensoryFrame& frame) {
@@ -290,7 +301,8 @@ class Converter {
   Pose2 pose_;  // The integrated odometry.
   double v_ = 0.0, w_ = 0.0;
   bool integrating_ = false;
-  bool pending_ = false;  // pose_ has an increment not yet stated (its action had no stamp).
+  bool pending_ = false;  // pose_ has an increment not yet stated (no sensory frame since).
+  std::optional<Stamp> pending_stamp_;  // Its action's stamp, if it had one.
   std::optional<Stamp> first_observation_, last_stamp_;
 };
 

@@ -129,7 +129,10 @@ TEST(MrptRawlogSynthetic, ObservationsFormatWithLabelledLeftToRightLasers) {
 
 // Actions and sensory frames without time stamps on the actions: each integrated pose is stamped
 // with the next sensory frame's earliest observation, the last one with the last stamp seen.
-TEST(MrptRawlogSynthetic, ActionsWithoutStampsTakeTheNextSensoryFrames) {
+// An action is the motion from one sensory frame to the next (MRPT's convention): the pose it
+// leads to is stated at the next frame's stamp, not at the action's own (MRPT's grabber stamps it
+// half-way); an action with no frame after it at its own stamp, or the last one seen.
+TEST(MrptRawlogSynthetic, AnActionsPoseIsStatedAtTheNextSensoryFrame) {
   const std::string path = temp_path("actions.rawlog");
   {
     mrpt::io::CFileOutputStream out(path);  // Uncompressed.
@@ -141,6 +144,7 @@ TEST(MrptRawlogSynthetic, ActionsWithoutStampsTakeTheNextSensoryFrames) {
       archive << frame;
       mrpt::obs::CActionRobotMovement2D move;
       move.computeFromOdometry(mrpt::poses::CPose2D(1.0, 0.0, kPi / 2), model);
+      if (k != 1) move.timestamp = mrpt::Clock::fromDouble(kT0 + k + 0.5);  // Half-way.
       mrpt::obs::CActionCollection actions;
       actions.insert(move);
       archive << actions;
@@ -162,7 +166,7 @@ TEST(MrptRawlogSynthetic, ActionsWithoutStampsTakeTheNextSensoryFrames) {
   EXPECT_NEAR(std::remainder(odometry[3].pose.yaw_rad + kPi / 2, 2 * kPi), 0.0, 1e-9);
   EXPECT_NEAR(odometry[1].header.stamp.seconds(), kT0 + 1, 1e-6);
   EXPECT_NEAR(odometry[2].header.stamp.seconds(), kT0 + 2, 1e-6);
-  EXPECT_NEAR(odometry[3].header.stamp.seconds(), kT0 + 2, 1e-6);  // No frame after it.
+  EXPECT_NEAR(odometry[3].header.stamp.seconds(), kT0 + 2.5, 1e-6);  // No frame after it.
 }
 
 }  // namespace

@@ -52,6 +52,10 @@ struct RegistrationConfig {
   double odometry_noise_rad = 0.002;
   double constant_velocity_noise_m = 0.2;
   double constant_velocity_noise_rad = 0.1;
+  /// The constant-velocity guess's velocity: each scan's registered motion counts this much
+  /// against the estimate so far (1: the last scan's motion alone, which oscillated and diverged
+  /// along a corridor at 1 m/s).
+  double velocity_smoothing = 0.5;
   /// A scan is degenerate (a corridor with nothing ahead) when the weakest direction of its
   /// translation information is below this share of the strongest; along that direction the seed
   /// holds (the seed's noise keeps it).
@@ -152,7 +156,8 @@ class ScanRegistration {
   double previous_stamp_s_ = 0.0;
   Pose2 previous_pose_;  // Registered.
   std::optional<Pose2> previous_odometry_;
-  Pose2 velocity_per_s_;          // Sensor-frame motion per second, last estimate.
+  Pose2 velocity_per_s_;          // Sensor-frame motion per second, smoothed estimate.
+  bool velocity_per_s_initialised_ = false;
   Pose2 odometry_to_fixed_;       // Registered fixed frame from the odometry frame.
   double model_error_sum_ = 0.0;  // Adaptive threshold: squared deviations, count.
   std::int64_t model_error_count_ = 0;

@@ -5,7 +5,8 @@
 ///   preset: default | thesis   the starting point: DynamicFilterConfig{} (when absent) or
 ///                              thesis_config(); every other key changes it
 ///   segmentation: {...}, tracking: {...}, velocity: {...}, classification: {...},
-///   free_space: {...}, max_time_gap_s, max_pose_jump_m, max_pose_jump_rad
+///   free_space: {...}, max_time_gap_s, max_pose_jump_m, max_pose_jump_rad,
+///   max_speed_mps, max_turn_rate_radps
 ///   odometry: {...}            read by `dispel odom` (parse_odometry_settings), skipped here
 /// Missing keys keep the preset's value. Unknown keys, wrong types and invalid values are errors.
 

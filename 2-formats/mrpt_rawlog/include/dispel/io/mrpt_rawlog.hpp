@@ -17,8 +17,10 @@
 ///   changes.
 /// - odometry: nav_msgs/Odometry on "/odom" (odom -> base_link). In the actions/observations
 ///   format each CActionRobotMovement2D's increment (the mean of its poseChange) is integrated
-///   from the identity, stamped with the action's timestamp or, when it has none, the next sensory
-///   frame's; a pose at the identity is stated at the first observation's stamp when it comes
+///   from the identity. An action is the motion from one sensory frame to the next (MRPT's
+///   convention), so the pose it leads to is stamped with the next sensory frame's stamp (its
+///   earliest observation's); an action with no frame after it, with its own stamp or the last
+///   one seen. A pose at the identity is stated at the first observation's stamp when it comes
 ///   before the first action. A CObservationOdometry gives its absolute pose as it is.
 /// - every other observation or action is skipped and counted (skipped()).
 ///

@@ -31,7 +31,19 @@ PoseLookup PoseBuffer::lookup(double stamp_s, Pose2& pose) const {
                                       [](double t, const TimedPose& p) { return t < p.stamp_s; });
   const TimedPose& b = *after;
   const TimedPose& a = *(after - 1);
-  if (b.stamp_s - a.stamp_s > max_gap_s_) return PoseLookup::kGap;
+  if (b.stamp_s - a.stamp_s > max_gap_s_) {
+    // Not interpolated across the gap; a pose within the tolerance of either side is used, as at
+    // the ends (a scanner at 4 Hz has scans at the very stamps of the poses around a long gap).
+    if (stamp_s - a.stamp_s <= tolerance_s_ && stamp_s - a.stamp_s <= b.stamp_s - stamp_s) {
+      pose = a.pose;
+      return PoseLookup::kOk;
+    }
+    if (b.stamp_s - stamp_s <= tolerance_s_) {
+      pose = b.pose;
+      return PoseLookup::kOk;
+    }
+    return PoseLookup::kGap;
+  }
   const double w = (stamp_s - a.stamp_s) / (b.stamp_s - a.stamp_s);
   pose.x_m = a.pose.x_m + w * (b.pose.x_m - a.pose.x_m);
   pose.y_m = a.pose.y_m + w * (b.pose.y_m - a.pose.y_m);

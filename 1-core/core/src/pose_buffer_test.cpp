@@ -43,6 +43,15 @@ TEST(PoseBuffer, RefusesNonFiniteAndRepeatedStampsAndDoesNotBridgeGaps) {
   EXPECT_FALSE(buffer.add(1.0, {}));
   EXPECT_TRUE(buffer.add(3.0, {}));
   EXPECT_EQ(buffer.lookup(2.0, p), PoseLookup::kGap);
+  // At either side of the gap, within the tolerance, the pose there (not interpolated).
+  ASSERT_TRUE(buffer.add(4.0, {1.0, 0.0, 0.0}));
+  EXPECT_EQ(buffer.lookup(3.0, p), PoseLookup::kOk);
+  EXPECT_EQ(p.x_m, 0.0);
+  EXPECT_EQ(buffer.lookup(3.96, p), PoseLookup::kOk);
+  EXPECT_EQ(p.x_m, 1.0);
+  EXPECT_EQ(buffer.lookup(3.03, p), PoseLookup::kOk);
+  EXPECT_EQ(p.x_m, 0.0);
+  EXPECT_EQ(buffer.lookup(3.9, p), PoseLookup::kGap);
   EXPECT_STREQ(pose_lookup_name(PoseLookup::kGap), "pose_gap");
 }
 

@@ -26,7 +26,9 @@ enum class PoseLookup {
 };
 
 /// Poses in time order, interpolated linearly (yaw along the shorter arc). Never extrapolates
-/// beyond `tolerance_s`: within it the nearest end pose is used, beyond it the lookup fails.
+/// beyond `tolerance_s`: within it the nearest end pose is used, beyond it the lookup fails. Nor
+/// does it interpolate across a gap longer than `max_gap_s`: there too only a pose within
+/// `tolerance_s` of the stamp is used.
 class PoseBuffer {
  public:
   /// @param tolerance_s how far before the first or after the last pose a lookup may be.

@@ -231,8 +231,9 @@ Eigen::Vector2d ScanRegistration::normal_at(std::size_t b) const {
 
 // The candidate map points of each sample point (at @p pose): the points of the voxels within
 // @p reach of its voxel (structure only, or all) that lie within @p radius of it; returns how many
-// sample points have one. The registration moves a point by less than the threshold, so a radius
-// of twice the threshold keeps every point it can match.
+// sample points have one. The radius is the threshold plus the largest correction a registration
+// may make (max_correction_m): twice the threshold alone lost matches the registration needed
+// (a simulated warehouse seed kept 0.990 of its walls instead of 0.999).
 std::int32_t ScanRegistration::gather_candidates(const Pose2& pose, int reach, double radius,
                                                  bool structure_only) {
   candidate_begin_.assign(sample_.size() + 1, 0);
@@ -316,8 +317,8 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
       // A young map (the first scans, or a scene that has just changed) has no structure yet:
       // then every voxel is a candidate.
       const int reach = static_cast<int>(std::ceil(threshold / config_.voxel_size_m));
-      if (gather_candidates(seed, reach, 2.0 * threshold, true) < config_.min_points) {
-        gather_candidates(seed, reach, 2.0 * threshold, false);
+      if (gather_candidates(seed, reach, threshold + config_.max_correction_m, true) < config_.min_points) {
+        gather_candidates(seed, reach, threshold + config_.max_correction_m, false);
       }
 
       const double kappa = threshold / 3.0;

@@ -2,10 +2,24 @@
 
 #include <cmath>
 #include <limits>
+#include <type_traits>
+#include <utility>
 
 #include "dispel/io/errors.hpp"
 
 namespace dispel::io {
+
+DecodedMessage::DecodedMessage(std::string topic, Stamp time, DecodedPayload payload)
+    : topic_(std::move(topic)), time_(time), payload_(std::move(payload)) {
+  // The variant's alternatives in MessageKind's order.
+  static_assert(std::is_same_v<std::variant_alternative_t<0, DecodedPayload>, ScanMessage> &&
+                std::is_same_v<std::variant_alternative_t<5, DecodedPayload>, NavSatFixMessage>);
+  constexpr MessageKind kKinds[] = {MessageKind::kLaserScan,  MessageKind::kOdometry,
+                                    MessageKind::kTransforms, MessageKind::kJointState,
+                                    MessageKind::kImu,        MessageKind::kNavSatFix};
+  kind_ = kKinds[payload_.index()];
+}
+
 
 Stamp Stamp::from_seconds(double seconds) {
   const double whole = std::floor(seconds);

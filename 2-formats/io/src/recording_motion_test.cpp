@@ -5,46 +5,39 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
-#include <variant>
 
 #include "dispel/io/errors.hpp"
 
 namespace dispel::io {
 namespace {
 
-using Payload = std::variant<ScanMessage, OdometryMessage, TransformsMessage>;
-
 // A recording held in memory, in the order given.
 class MemoryRecording final : public RecordingReader {
  public:
-  void add(const std::string& topic, double t, Payload p) {
-    const MessageKind kind = std::holds_alternative<ScanMessage>(p) ? MessageKind::kLaserScan
-                             : std::holds_alternative<OdometryMessage>(p)
-                                 ? MessageKind::kOdometry
-                                 : MessageKind::kTransforms;
-    messages_.push_back({topic, Stamp::from_seconds(t), kind, std::move(p)});
+  void add(const std::string& topic, double t, DecodedPayload p) {
+    messages_.emplace_back(topic, Stamp::from_seconds(t), std::move(p));
     std::map<std::string, TopicInfo> topics = topics_.all();
     TopicInfo& info = topics[topic];
-    info.kind = kind;
-    info.type = message_kind_name(kind);
+    info.kind = messages_.back().kind();
+    info.type = message_kind_name(info.kind);
     ++info.messages;
     topics_ = Topics(std::move(topics));
   }
   const std::string& path() const override { return path_; }
   std::string format_name() const override { return "memory"; }
   const Topics& topics() const override { return topics_; }
-  Stamp begin_time() const override { return messages_.front().time; }
-  Stamp end_time() const override { return messages_.back().time; }
+  Stamp begin_time() const override { return messages_.front().time(); }
+  Stamp end_time() const override { return messages_.back().time(); }
   void read(const std::vector<std::string>& topics,
             const std::function<void(const RecordedMessage&)>& visit) override {
-    for (const Entry& e : messages_) {
-      if (!topics.empty() && std::find(topics.begin(), topics.end(), e.topic) == topics.end()) {
+    for (const DecodedMessage& m : messages_) {
+      if (!topics.empty() && std::find(topics.begin(), topics.end(), m.topic()) == topics.end()) {
         continue;
       }
-      const View v(e);
       try {
-        visit(v);
+        visit(m);
       } catch (const StopReading&) {
         return;
       }
@@ -52,38 +45,8 @@ class MemoryRecording final : public RecordingReader {
   }
 
  private:
-  struct Entry {
-    std::string topic;
-    Stamp time;
-    MessageKind kind;
-    Payload payload;
-  };
-  class View final : public RecordedMessage {
-   public:
-    explicit View(const Entry& e) : e_(e) {}
-    const std::string& topic() const override { return e_.topic; }
-    MessageKind kind() const override { return e_.kind; }
-    Stamp time() const override { return e_.time; }
-    std::optional<ScanMessage> scan() const override { return get<ScanMessage>(); }
-    std::optional<OdometryMessage> odometry() const override { return get<OdometryMessage>(); }
-    std::optional<TransformsMessage> transforms() const override {
-      return get<TransformsMessage>();
-    }
-    std::optional<JointStateMessage> joint_state() const override { return std::nullopt; }
-    std::optional<ImuMessage> imu() const override { return std::nullopt; }
-    std::optional<NavSatFixMessage> nav_sat_fix() const override { return std::nullopt; }
-
-   private:
-    template <typename T>
-    std::optional<T> get() const {
-      if (const T* p = std::get_if<T>(&e_.payload)) return *p;
-      return std::nullopt;
-    }
-    const Entry& e_;
-  };
-
   std::string path_ = "memory.bag";
-  std::vector<Entry> messages_;
+  std::vector<DecodedMessage> messages_;
   Topics topics_;
 };
 

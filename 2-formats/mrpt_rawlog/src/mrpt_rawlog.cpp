@@ -17,7 +17,6 @@
 #include <fstream>
 #include <limits>
 #include <set>
-#include <variant>
 
 #include "dispel/io/errors.hpp"
 
@@ -129,45 +128,13 @@ ScanMessage scan_message_of(const mrpt::obs::CObservation2DRangeScan& s, const S
   return m;
 }
 
-using Payload = std::variant<ScanMessage, OdometryMessage, TransformsMessage>;
-
-struct Entry {
-  std::string topic;
-  MessageKind kind;
-  Stamp time;
-  Payload payload;
-};
-
-// One message of a rawlog, decoded already.
-class RawlogMessage final : public RecordedMessage {
- public:
-  explicit RawlogMessage(const Entry& e) : e_(e) {}
-  const std::string& topic() const override { return e_.topic; }
-  MessageKind kind() const override { return e_.kind; }
-  Stamp time() const override { return e_.time; }
-  std::optional<ScanMessage> scan() const override { return get<ScanMessage>(); }
-  std::optional<OdometryMessage> odometry() const override { return get<OdometryMessage>(); }
-  std::optional<TransformsMessage> transforms() const override { return get<TransformsMessage>(); }
-  std::optional<JointStateMessage> joint_state() const override { return std::nullopt; }
-  std::optional<ImuMessage> imu() const override { return std::nullopt; }
-  std::optional<NavSatFixMessage> nav_sat_fix() const override { return std::nullopt; }
-
- private:
-  template <typename T>
-  std::optional<T> get() const {
-    if (const auto* p = std::get_if<T>(&e_.payload)) return *p;
-    return std::nullopt;
-  }
-  const Entry& e_;
-};
-
 constexpr const char* kOdomTopic = "/odom";
 constexpr const char* kMountTopic = "/tf_static";
 
 // Turns the rawlog's objects, in file order, into entries.
 class Converter {
  public:
-  explicit Converter(std::vector<Entry>& entries, std::map<std::string, std::int64_t>& skipped)
+  explicit Converter(std::vector<DecodedMessage>& entries, std::map<std::string, std::int64_t>& skipped)
       : entries_(entries), skipped_(skipped) {}
 
   void object(const mrpt::serialization::CSerializable::Ptr& obj) {
@@ -273,10 +240,9 @@ class Converter {
       mounts_[frame] = mount;
       TransformsMessage tf;
       tf.transforms.push_back({stamp, "base_link", frame, mount});
-      entries_.push_back({kMountTopic, MessageKind::kTransforms, stamp, std::move(tf)});
+      entries_.emplace_back(kMountTopic, stamp, std::move(tf));
     }
-    entries_.push_back(
-        {topic, MessageKind::kLaserScan, stamp, scan_message_of(s, stamp, frame, seq_[topic]++)});
+    entries_.emplace_back(topic, stamp, scan_message_of(s, stamp, frame, seq_[topic]++));
   }
 
   void odometry_at(const Stamp& stamp) {
@@ -291,10 +257,10 @@ class Converter {
     m.pose = pose;
     m.v_mps = v;
     m.w_radps = w;
-    entries_.push_back({kOdomTopic, MessageKind::kOdometry, stamp, std::move(m)});
+    entries_.emplace_back(kOdomTopic, stamp, std::move(m));
   }
 
-  std::vector<Entry>& entries_;
+  std::vector<DecodedMessage>& entries_;
   std::map<std::string, std::int64_t>& skipped_;
   std::map<std::string, Pose2> mounts_;  // By frame: the last mount stated.
   std::map<std::string, std::uint32_t> seq_;
@@ -310,7 +276,7 @@ class Converter {
 
 struct MrptRawlogReader::Impl {
   std::string path;
-  std::vector<Entry> entries;
+  std::vector<DecodedMessage> entries;
   Topics topics;
   std::map<std::string, std::int64_t> skipped;
   std::int64_t skipped_count = 0;
@@ -348,12 +314,12 @@ MrptRawlogReader::MrptRawlogReader(const std::string& path) : impl_(std::make_un
   converter.finish();
 
   std::stable_sort(impl_->entries.begin(), impl_->entries.end(),
-                   [](const Entry& a, const Entry& b) { return a.time < b.time; });
+                   [](const DecodedMessage& a, const DecodedMessage& b) { return a.time() < b.time(); });
   std::map<std::string, TopicInfo> topics;
-  for (const Entry& e : impl_->entries) {
-    TopicInfo& info = topics[e.topic];
-    info.type = message_kind_name(e.kind);
-    info.kind = e.kind;
+  for (const DecodedMessage& e : impl_->entries) {
+    TopicInfo& info = topics[e.topic()];
+    info.type = message_kind_name(e.kind());
+    info.kind = e.kind();
     ++info.messages;
   }
   impl_->topics = Topics(std::move(topics));
@@ -366,20 +332,20 @@ const std::string& MrptRawlogReader::path() const { return impl_->path; }
 const Topics& MrptRawlogReader::topics() const { return impl_->topics; }
 
 Stamp MrptRawlogReader::begin_time() const {
-  return impl_->entries.empty() ? Stamp{} : impl_->entries.front().time;
+  return impl_->entries.empty() ? Stamp{} : impl_->entries.front().time();
 }
 
 Stamp MrptRawlogReader::end_time() const {
-  return impl_->entries.empty() ? Stamp{} : impl_->entries.back().time;
+  return impl_->entries.empty() ? Stamp{} : impl_->entries.back().time();
 }
 
 void MrptRawlogReader::read(const std::vector<std::string>& topics,
                             const std::function<void(const RecordedMessage&)>& visit) {
   const std::set<std::string> wanted(topics.begin(), topics.end());
-  for (const Entry& e : impl_->entries) {
-    if (!wanted.empty() && wanted.count(e.topic) == 0) continue;
+  for (const DecodedMessage& e : impl_->entries) {
+    if (!wanted.empty() && wanted.count(e.topic()) == 0) continue;
     try {
-      visit(RawlogMessage(e));
+      visit(e);
     } catch (const StopReading&) {
       return;
     }

@@ -19,6 +19,7 @@
 
 #include "dispel/io/ros1_messages.hpp"
 #include "dispel/sim/raycast.hpp"
+#include "bag_contents.hpp"
 #include "test_files.hpp"
 
 namespace dispel::jobs {
@@ -32,21 +33,8 @@ using test::exists;
 using test::source_path;
 using test::temp_path;
 
-struct BagContents {
-  std::map<std::string, std::vector<sensor_msgs::LaserScan>> scans;
-  std::map<std::string, std::size_t> count;
-};
-
-BagContents read_bag(const std::string& path) {
-  BagContents c;
-  rosbag::Bag bag(path, rosbag::bagmode::Read);
-  rosbag::View view(bag);
-  for (const rosbag::MessageInstance& m : view) {
-    ++c.count[m.getTopic()];
-    if (const auto s = m.instantiate<sensor_msgs::LaserScan>()) c.scans[m.getTopic()].push_back(*s);
-  }
-  return c;
-}
+using test::BagContents;
+using test::read_bag;
 
 // --- The recorded leg_tracker bag -----------------------------------------------------------
 

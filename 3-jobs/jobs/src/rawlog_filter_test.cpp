@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "dispel/jobs/filter_job.hpp"
+#include "bag_contents.hpp"
 #include "test_files.hpp"
 
 namespace dispel::jobs {
@@ -21,21 +22,8 @@ using test::write_text;
 
 const std::string kSena = DISPEL_MRPT_SENA_RAWLOG;
 
-struct BagContents {
-  std::map<std::string, std::vector<sensor_msgs::LaserScan>> scans;
-  std::map<std::string, std::size_t> count;
-};
-
-BagContents read_bag(const std::string& path) {
-  BagContents c;
-  rosbag::Bag bag(path, rosbag::bagmode::Read);
-  rosbag::View view(bag);
-  for (const rosbag::MessageInstance& m : view) {
-    ++c.count[m.getTopic()];
-    if (const auto s = m.instantiate<sensor_msgs::LaserScan>()) c.scans[m.getTopic()].push_back(*s);
-  }
-  return c;
-}
+using test::BagContents;
+using test::read_bag;
 
 // The wheelchair's log (225 scans of 361 beams at about 4 Hz, odometry as MRPT actions, the laser
 // 0.78 m ahead of base_link, the chair driving up to 1.3 m/s) filtered with the default

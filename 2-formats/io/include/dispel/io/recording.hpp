@@ -11,6 +11,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "dispel/core/dynamic_filter.hpp"
@@ -154,6 +155,39 @@ class RecordedMessage {
   virtual std::optional<JointStateMessage> joint_state() const = 0;
   virtual std::optional<ImuMessage> imu() const = 0;
   virtual std::optional<NavSatFixMessage> nav_sat_fix() const = 0;
+};
+
+/// A message of one of the types dispel understands, decoded.
+using DecodedPayload = std::variant<ScanMessage, OdometryMessage, TransformsMessage,
+                                    JointStateMessage, ImuMessage, NavSatFixMessage>;
+
+/// A message held decoded in memory (a format read whole, such as an MRPT rawlog, or a test's
+/// recording); its kind follows its payload.
+class DecodedMessage final : public RecordedMessage {
+ public:
+  DecodedMessage(std::string topic, Stamp time, DecodedPayload payload);
+  const std::string& topic() const override { return topic_; }
+  MessageKind kind() const override { return kind_; }
+  Stamp time() const override { return time_; }
+  std::optional<ScanMessage> scan() const override { return get<ScanMessage>(); }
+  std::optional<OdometryMessage> odometry() const override { return get<OdometryMessage>(); }
+  std::optional<TransformsMessage> transforms() const override { return get<TransformsMessage>(); }
+  std::optional<JointStateMessage> joint_state() const override {
+    return get<JointStateMessage>();
+  }
+  std::optional<ImuMessage> imu() const override { return get<ImuMessage>(); }
+  std::optional<NavSatFixMessage> nav_sat_fix() const override { return get<NavSatFixMessage>(); }
+
+ private:
+  template <typename T>
+  std::optional<T> get() const {
+    if (const T* p = std::get_if<T>(&payload_)) return *p;
+    return std::nullopt;
+  }
+  std::string topic_;
+  Stamp time_;
+  MessageKind kind_;
+  DecodedPayload payload_;
 };
 
 /// Thrown by a visitor of RecordingReader::read() to stop reading there: read() returns.

@@ -154,14 +154,15 @@ bool ScanRegistration::explained(std::size_t b) const {
 // Beam points in the sensor frame at the scan's stamp: each beam moved back by the sensor's
 // motion between the stamp and its own time (time_increment); the sample for the registration
 // thinned to scan_spacing_m.
-void ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s) {
+void ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s,
+                                       bool deskew_wanted) {
   const std::size_t n = scan.size();
   const std::vector<Eigen::Vector2d>& unit = directions_.of(scan);
   local_points_.assign(n, Eigen::Vector2d(kNaN, kNaN));
   sample_.clear();
   const double ti = scan.time_increment_s;
   const bool deskew =
-      config_.deskew && std::isfinite(ti) && ti > 0.0 && ti * static_cast<double>(n) <= 1.0;
+      deskew_wanted && config_.deskew && std::isfinite(ti) && ti > 0.0 && ti * static_cast<double>(n) <= 1.0;
   // The motion from the stamp to beam b's time is b steps of one beam's: its rotation by
   // recurrence (one sine and cosine per scan), its translation to first order in time.
   const double step_yaw = motion_per_s.yaw_rad * ti;
@@ -298,7 +299,10 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
   }
   const Pose2 motion_per_s =
       dt > 0.0 ? Pose2{delta.x_m / dt, delta.y_m / dt, delta.yaw_rad / dt} : velocity_per_s_;
-  thin_and_deskew(scan, motion_per_s);
+  // Only by the odometry's motion: de-skewing by a constant-velocity guess feeds the guess's
+  // error back into the registration (a guess too slow shortens the scan along the motion, which
+  // then registers slower still): laser-only ran away along a corridor with it.
+  thin_and_deskew(scan, motion_per_s, report.seeded_by_odometry);
   report.points = static_cast<std::int32_t>(sample_.size());
 
   Pose2 pose = seed;
@@ -388,7 +392,10 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
         pose.y_m += step.y();
         pose.yaw_rad = wrap_angle(pose.yaw_rad + step.z());
         report.iterations = iteration + 1;
-        if (step.head<2>().norm() < 1e-4 && std::abs(step.z()) < 1e-5) break;
+        // Converged: a step of 1 mm and 0.1 mrad is far below the returns' noise. (1e-4 and 1e-5
+        // ran to max_iterations on most scans, the Geman-McClure weights and the correspondences
+        // trading places at that scale.)
+        if (step.head<2>().norm() < 1e-3 && std::abs(step.z()) < 1e-4) break;
       }
       // With odometry to fall back on, a scan must match more structure to be trusted over it.
       const bool enough = inliers >= (report.seeded_by_odometry ? config_.min_points_with_odometry

@@ -87,10 +87,9 @@ Errors run(const sim::SimulationOutput& out, const sim::Scenario& s, bool with_o
 // The registration on the simulator, 100 s around the office loop (100 m at 1 m/s). The issue's
 // targets: relative pose error over 1 s below 1 cm and 0.2 degrees, less drift than the wheel
 // odometry's, laser-only within twice the odometry-seeded error. Measured seeded: 1.7 cm and
-// 0.19 degrees over 1 s, 0.17 m after 100 m (wheel odometry: 12 m): the 1 cm target is not
-// reached. Laser-only: 0.16 m and 0.27 degrees over 1 s, 2.1 m after 100 m: far better than the
-// wheel odometry, but not within twice the seeded error (the corridor's length is poorly
-// constrained and the constant-velocity guess holds its error there).
+// 0.17 degrees over 1 s, 0.03 m after 100 m (wheel odometry: 12 m): the 1 cm target is not
+// reached. Laser-only: 6.4 cm and 0.61 degrees over 1 s (not within twice the seeded error: its
+// scans are not de-skewed), 0.05 m after 100 m.
 TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
   const sim::Scenario s = office_loop(100.0);
   const sim::SimulationOutput out = sim::simulate(s, 1);
@@ -106,21 +105,22 @@ TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
   EXPECT_LT(seeded.relative_1s_m, 0.02);
   EXPECT_LT(seeded.relative_1s_rad, 0.25 * kDeg);
   EXPECT_LT(seeded.final_m, 0.1 * odometry_final_m);
-  // Laser-only, the same loop: measured 0.16 m and 0.27 degrees over 1 s, 2.1 m after 100 m.
-  // Its constant-velocity guess without smoothing oscillated along the corridor and diverged
-  // (2.8 m over 1 s in the first 20 s). Bounds with room for another build's rounding: the
-  // registration amplifies a last-digit difference along a corridor.
+  // Laser-only, the same loop: measured 6.4 cm and 0.61 degrees over 1 s, 0.05 m after 100 m.
+  // It ran away along the first corridor (37 m off after 100 m) while its scans were de-skewed
+  // by the guessed motion, and oscillated and diverged while the guess was the last scan's motion
+  // alone (2.8 m over 1 s in the first 20 s); with either, these bounds fail. With room for
+  // another build's rounding (with 0.3 or 0.7 for velocity_smoothing: 6 cm, 0.4-0.7 m).
   EXPECT_GE(laser_only_loop.registered, scans - scans / 50);
-  EXPECT_LT(laser_only_loop.relative_1s_m, 0.4);
+  EXPECT_LT(laser_only_loop.relative_1s_m, 0.15);
   EXPECT_LT(laser_only_loop.relative_1s_rad, 1.0 * kDeg);
-  EXPECT_LT(laser_only_loop.final_m, 0.5 * odometry_final_m);
+  EXPECT_LT(laser_only_loop.final_m, 0.2 * odometry_final_m);
 
   const sim::Scenario straight = office_loop(20.0);
   const sim::SimulationOutput first = sim::simulate(straight, 1);
   const Errors seeded_straight = run(first, straight, true);
   const Errors laser_only = run(first, straight, false);
   EXPECT_GE(seeded_straight.registered, static_cast<int>(first.scans.size()) - 5);
-  EXPECT_LT(laser_only.relative_1s_m, 0.4);
+  EXPECT_LT(laser_only.relative_1s_m, 0.15);
   std::printf(
       "loop, relative 1 s: seeded %.4f m %.3f deg, laser-only %.4f m %.3f deg; after %.0f s "
       "seeded %.3f m, laser-only %.3f m, wheel odometry %.3f m. First 20 s: seeded %.4f m %.3f "

@@ -72,7 +72,8 @@ struct RegistrationConfig {
   double explained_distance_m = 0.12;
   /// Structure explains only while seen: hit within this long before the scan.
   double explained_max_age_s = 0.5;
-  /// Beams are de-skewed by their time_increment with the motion since the previous scan.
+  /// Beams are de-skewed by their time_increment with the odometry's motion since the previous
+  /// scan (never by a constant-velocity guess: its error fed back into the registration).
   bool deskew = true;
 
   /// Throws std::invalid_argument naming the first bad field.
@@ -146,7 +147,7 @@ class ScanRegistration {
   Key key_of(const Eigen::Vector2d& p) const;
   bool structure(const Voxel& v) const;
   std::int32_t gather_candidates(const Pose2& pose, int reach, double radius, bool structure_only);
-  void thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s);
+  void thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s, bool deskew_wanted);
   Eigen::Vector2d normal_at(std::size_t b) const;
 
   RegistrationConfig config_;

@@ -218,10 +218,9 @@ void DynamicFilter::place_beams(const LaserScan& scan, const Pose2& sensor_pose)
   const PoseTransform to_fixed(sensor_pose);
   beam_points_.resize(scan.size());
   for (std::size_t b = 0; b < scan.size(); ++b) {
-    beam_points_[b] =
-        scan.is_valid(b)
-            ? to_fixed(static_cast<double>(scan.ranges_m[b]) * unit[b])
-            : Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+    beam_points_[b] = scan.is_valid(b)
+                          ? to_fixed(static_cast<double>(scan.ranges_m[b]) * unit[b])
+                          : Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
   }
 }
 
@@ -510,8 +509,7 @@ void DynamicFilter::forget_lost_tracks() {
 
 // Step 7: one label per beam from its object's verdict; the beams of dynamic and unknown objects
 // become NaN.
-void DynamicFilter::label(const LaserScan& scan, const ScanCheck& check,
-                          FilterResult& out) {
+void DynamicFilter::label(const LaserScan& scan, const ScanCheck& check, FilterResult& out) {
   out.event = check.event;
   out.filtered = scan;
   out.labels.resize(scan.size());

@@ -161,8 +161,8 @@ void ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motio
   local_points_.assign(n, Eigen::Vector2d(kNaN, kNaN));
   sample_.clear();
   const double ti = scan.time_increment_s;
-  const bool deskew =
-      deskew_wanted && config_.deskew && std::isfinite(ti) && ti > 0.0 && ti * static_cast<double>(n) <= 1.0;
+  const bool deskew = deskew_wanted && config_.deskew && std::isfinite(ti) && ti > 0.0 &&
+                      ti * static_cast<double>(n) <= 1.0;
   // The motion from the stamp to beam b's time is b steps of one beam's: its rotation by
   // recurrence (one sine and cosine per scan), its translation to first order in time.
   const double step_yaw = motion_per_s.yaw_rad * ti;
@@ -321,7 +321,8 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
       // A young map (the first scans, or a scene that has just changed) has no structure yet:
       // then every voxel is a candidate.
       const int reach = static_cast<int>(std::ceil(threshold / config_.voxel_size_m));
-      if (gather_candidates(seed, reach, threshold + config_.max_correction_m, true) < config_.min_points) {
+      if (gather_candidates(seed, reach, threshold + config_.max_correction_m, true) <
+          config_.min_points) {
         gather_candidates(seed, reach, threshold + config_.max_correction_m, false);
       }
 

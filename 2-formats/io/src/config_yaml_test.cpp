@@ -163,16 +163,15 @@ TEST(ConfigYaml, UnknownKeysWrongTypesAndBadValuesAreErrorsNamingTheKey) {
 
 TEST(ConfigYaml, TopLevelKeysAreThoseTheParserAccepts) {
   const std::set<std::string> keys = filter_config_top_level_keys();
-  EXPECT_EQ(keys,
-            (std::set<std::string>{"preset", "odometry", "segmentation", "tracking", "velocity",
-                                   "classification", "free_space", "registration", "max_time_gap_s",
-                                   "max_pose_jump_m", "max_pose_jump_rad", "max_speed_mps",
-                                   "max_turn_rate_radps"}));
+  EXPECT_EQ(keys, (std::set<std::string>{"preset", "odometry", "segmentation", "tracking",
+                                         "velocity", "classification", "free_space", "registration",
+                                         "max_time_gap_s", "max_pose_jump_m", "max_pose_jump_rad",
+                                         "max_speed_mps", "max_turn_rate_radps"}));
   // Each of them is accepted...
-  for (const char* text :
-       {"segmentation: {}", "tracking: {}", "velocity: {}", "classification: {}", "free_space: {}",
-        "registration: {}", "max_time_gap_s: 1.0", "max_pose_jump_m: 1.0", "max_pose_jump_rad: 1.0",
-        "max_speed_mps: 2.0", "max_turn_rate_radps: 2.0", "preset: thesis", "odometry: {model: ct}"}) {
+  for (const char* text : {"segmentation: {}", "tracking: {}", "velocity: {}", "classification: {}",
+                           "free_space: {}", "registration: {}", "max_time_gap_s: 1.0",
+                           "max_pose_jump_m: 1.0", "max_pose_jump_rad: 1.0", "max_speed_mps: 2.0",
+                           "max_turn_rate_radps: 2.0", "preset: thesis", "odometry: {model: ct}"}) {
     EXPECT_NO_THROW(parse_filter_config(text, "t.yaml")) << text;
   }
   // ...and anything else is not.

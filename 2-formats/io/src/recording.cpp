@@ -20,7 +20,6 @@ DecodedMessage::DecodedMessage(std::string topic, Stamp time, DecodedPayload pay
   kind_ = kKinds[payload_.index()];
 }
 
-
 Stamp Stamp::from_seconds(double seconds) {
   const double whole = std::floor(seconds);
   auto nsec = static_cast<std::int64_t>(std::llround((seconds - whole) * 1e9));

@@ -134,7 +134,8 @@ constexpr const char* kMountTopic = "/tf_static";
 // Turns the rawlog's objects, in file order, into entries.
 class Converter {
  public:
-  explicit Converter(std::vector<DecodedMessage>& entries, std::map<std::string, std::int64_t>& skipped)
+  explicit Converter(std::vector<DecodedMessage>& entries,
+                     std::map<std::string, std::int64_t>& skipped)
       : entries_(entries), skipped_(skipped) {}
 
   void object(const mrpt::serialization::CSerializable::Ptr& obj) {
@@ -313,8 +314,9 @@ MrptRawlogReader::MrptRawlogReader(const std::string& path) : impl_(std::make_un
   if (objects == 0) throw InputError(path + ": not a readable MRPT rawlog (the file is empty)");
   converter.finish();
 
-  std::stable_sort(impl_->entries.begin(), impl_->entries.end(),
-                   [](const DecodedMessage& a, const DecodedMessage& b) { return a.time() < b.time(); });
+  std::stable_sort(
+      impl_->entries.begin(), impl_->entries.end(),
+      [](const DecodedMessage& a, const DecodedMessage& b) { return a.time() < b.time(); });
   std::map<std::string, TopicInfo> topics;
   for (const DecodedMessage& e : impl_->entries) {
     TopicInfo& info = topics[e.topic()];

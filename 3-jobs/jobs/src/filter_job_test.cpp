@@ -17,9 +17,9 @@
 #include <optional>
 #include <sstream>
 
+#include "bag_contents.hpp"
 #include "dispel/io/ros1_messages.hpp"
 #include "dispel/sim/raycast.hpp"
-#include "bag_contents.hpp"
 #include "test_files.hpp"
 
 namespace dispel::jobs {

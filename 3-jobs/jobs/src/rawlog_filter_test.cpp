@@ -9,8 +9,8 @@
 #include <map>
 #include <sstream>
 
-#include "dispel/jobs/filter_job.hpp"
 #include "bag_contents.hpp"
+#include "dispel/jobs/filter_job.hpp"
 #include "test_files.hpp"
 
 namespace dispel::jobs {

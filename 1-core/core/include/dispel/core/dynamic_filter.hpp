@@ -194,8 +194,7 @@ class DynamicFilter {
   void match(double stamp_s);
   void update_velocities(double stamp_s);
   void classify(const LaserScan& scan, const Pose2& sensor_pose, const Segmentation& segmentation);
-  void label(const LaserScan& scan, const ScanCheck& check,
-             FilterResult& out);
+  void label(const LaserScan& scan, const ScanCheck& check, FilterResult& out);
 
   // Step 1.
   void pass_through(const LaserScan& scan, FilterEvent event, FilterResult& out);

@@ -157,7 +157,7 @@ class ScanRegistration {
   double previous_stamp_s_ = 0.0;
   Pose2 previous_pose_;  // Registered.
   std::optional<Pose2> previous_odometry_;
-  Pose2 velocity_per_s_;          // Sensor-frame motion per second, smoothed estimate.
+  Pose2 velocity_per_s_;  // Sensor-frame motion per second, smoothed estimate.
   bool velocity_per_s_initialised_ = false;
   Pose2 odometry_to_fixed_;       // Registered fixed frame from the odometry frame.
   double model_error_sum_ = 0.0;  // Adaptive threshold: squared deviations, count.

@@ -172,9 +172,7 @@ class DecodedMessage final : public RecordedMessage {
   std::optional<ScanMessage> scan() const override { return get<ScanMessage>(); }
   std::optional<OdometryMessage> odometry() const override { return get<OdometryMessage>(); }
   std::optional<TransformsMessage> transforms() const override { return get<TransformsMessage>(); }
-  std::optional<JointStateMessage> joint_state() const override {
-    return get<JointStateMessage>();
-  }
+  std::optional<JointStateMessage> joint_state() const override { return get<JointStateMessage>(); }
   std::optional<ImuMessage> imu() const override { return get<ImuMessage>(); }
   std::optional<NavSatFixMessage> nav_sat_fix() const override { return get<NavSatFixMessage>(); }
 

@@ -108,6 +108,14 @@ TEST(ConfigYaml, ShippedMaskedFilesAreTheirPresetsWithTheThesisScannersSectors) 
   }
 }
 
+// For commands without --scale-to-scanner (dispel experiment on office_corridors_slam.yaml): the
+// default carried over to a 768-beam 270-degree 7.5 Hz scanner, as scale_to_scanner() does it.
+TEST(ConfigYaml, ShippedScannerFileIsTheDefaultCarriedOverToItsScanner) {
+  const DynamicFilterConfig loaded =
+      load_filter_config(std::string(DISPEL_SOURCE_DIR) + "/config/scanner_768_7hz.yaml");
+  expect_same(loaded, scale_to_scanner(DynamicFilterConfig{}, 0.352 * kPi / 180.0, 1.0 / 7.5));
+}
+
 TEST(ConfigYaml, PresetIsTheStartingPointWhereverItStands) {
   // The preset applies first even when written after other keys.
   const DynamicFilterConfig c = parse_filter_config(

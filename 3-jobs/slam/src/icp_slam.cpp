@@ -13,9 +13,9 @@
 #include <sstream>
 #include <utility>
 
-#include "slam_input.hpp"
 #include "dispel/core/pose_buffer.hpp"
 #include "dispel/jobs/job.hpp"
+#include "slam_input.hpp"
 
 namespace dispel::slam {
 namespace {
@@ -56,6 +56,9 @@ smallestThresholdDist = 0.05
 onlyClosestCorrespondences = true
 onlyUniqueRobust = true
 corresponding_points_decimation = 1
+
+[dispel]
+min_valid_beams = 120
 )ini";
 
 std::string trim(const std::string& s) {

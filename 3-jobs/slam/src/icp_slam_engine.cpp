@@ -35,9 +35,11 @@ constexpr std::int64_t kMinBeamsToStart = 30;
 
 struct IcpSlamEngine::Impl {
   mrpt::slam::CMetricMapBuilderICP builder;
+  std::int64_t min_valid_beams = 0;  // [dispel] min_valid_beams: fewer are not matched.
   bool started = false;
   Pose2 first_odometry;  // The engine's frame is the robot at the first scan.
-  Pose2 last_odometry;
+  Pose2 last_odometry;   // At the last scan given to the engine.
+  Pose2 last_estimate;   // The engine's estimate then, in its frame.
 };
 
 IcpSlamEngine::IcpSlamEngine(const std::string& config) : impl_(std::make_unique<Impl>()) {
@@ -47,8 +49,12 @@ IcpSlamEngine::IcpSlamEngine(const std::string& config) : impl_(std::make_unique
     const mrpt::config::CConfigFileMemory ini(config);
     b.ICP_options.loadFromConfigFile(ini, "MappingApplication");
     b.ICP_params.loadFromConfigFile(ini, "ICP");
+    impl_->min_valid_beams = ini.read_int("dispel", "min_valid_beams", 0);
   } catch (const std::exception& e) {
     throw jobs::JobError("SLAM engine configuration: " + first_line(e));
+  }
+  if (impl_->min_valid_beams < 0) {
+    throw jobs::JobError("SLAM engine configuration: [dispel] min_valid_beams must be >= 0");
   }
   const auto& o = b.ICP_options;
   if (!finite_non_negative(o.insertionLinDistance) ||
@@ -93,6 +99,12 @@ std::optional<Pose2> IcpSlamEngine::process(const LaserScan& scan, const Pose2& 
   // engine starts with the first scan that has enough valid beams; until then, odometry.
   const auto valid = static_cast<std::int64_t>(scan.ranges_m.size()) - invalid;
   if (!m.started && valid < kMinBeamsToStart) return odometry;
+  // Too few beams to be matched: MRPT's ICP-SLAM accepts a match of a dozen points, and a dozen
+  // wrong or ambiguous ones (a pillar, a walker kept) pull the pose by metres. The odometry
+  // carries the pose through such a scan; the engine does not see it.
+  if (m.started && valid < m.min_valid_beams) {
+    return m.first_odometry * (m.last_estimate * (m.last_odometry.inverse() * odometry));
+  }
 
   Pose2 increment;
   if (!m.started) {
@@ -115,7 +127,8 @@ std::optional<Pose2> IcpSlamEngine::process(const LaserScan& scan, const Pose2& 
   } catch (const std::exception& e) {
     throw jobs::JobError("SLAM engine: " + first_line(e));
   }
-  return m.first_odometry * Pose2{estimate.x(), estimate.y(), estimate.yaw()};
+  m.last_estimate = Pose2{estimate.x(), estimate.y(), estimate.yaw()};
+  return m.first_odometry * m.last_estimate;
 }
 
 std::vector<MapPoint> IcpSlamEngine::map_points() const {

@@ -98,6 +98,9 @@ class IcpSlamEngine {
   /// The engine starts (its map begins) with the first scan that has at least 30 valid beams;
   /// before it, the estimate is @p odometry (a filter with presumption of guilt removes every
   /// object of the first scans, and MRPT's ICP-SLAM never recovers from an empty first map).
+  /// After it, a scan with fewer valid beams than the configuration's [dispel] min_valid_beams
+  /// (120 by default) is not matched: the estimate follows the odometry from the last scan that
+  /// was.
   std::optional<Pose2> process(const LaserScan& scan, const Pose2& odometry, const Pose2& mount,
                                std::int64_t* invalid_beams = nullptr);
 

@@ -535,8 +535,8 @@ void DynamicFilter::label(const LaserScan& scan, const ScanCheck& check, FilterR
 
 // The label of valid beam @p b of object @p segment_label (or of no object: kLabelNoise). Beyond
 // the thesis: a beam of no object beside a dynamic track is one of its fragments; a beam of a
-// moving object that ends where something has stood for a while is kept. The beam's point is
-// computed only when one of those rules needs it.
+// moving object that ends where something has stood for a while is kept. The beam's point comes
+// from place_beams(), once per scan.
 BeamLabel DynamicFilter::beam_label(const LaserScan& scan, std::size_t b,
                                     std::int32_t segment_label, bool learned) {
   const FreeSpaceConfig& fs = config_.free_space;

@@ -27,6 +27,18 @@ bool edge_at_view_limit(EdgeNeighbour n) {
 // A track followed for longer than this without any sign of motion is known structure seen from
 // a new side (or merged with someone next to it), not something that just appeared in free space.
 constexpr std::int32_t kFreeSpaceMaxAge = 10;
+// An object made dynamic by free space is judged kFreeSpaceDecision_s later: confirmed if its
+// centroid has moved more than kFreeSpaceConfirm_m from where it appeared (or it is beside a
+// track that has moved: a walker's planted foot), else it was there all along (out of the scan
+// plane where the earlier beams passed) and is static again. A walker at 0.4 m/s leaves the
+// 0.15 m in 0.4 s; a static surface's centroid moves a few centimetres as the view of it changes.
+// Judged after one scan, a planted foot would be refuted and a surface whose visible part grows
+// confirmed.
+constexpr double kFreeSpaceConfirm_m = 0.15;
+constexpr double kFreeSpaceDecision_s = 0.4;
+// Faster than this from where it appeared, the track has jumped to another object (a chair leg
+// next to it), which is no evidence of motion: refuted too.
+constexpr double kMaxWalkerSpeed_mps = 2.5;
 
 // An object whose beams the registered map explains by at least this share is a surface that has
 // stood there: whatever its outline does, it is not moving.
@@ -38,6 +50,23 @@ constexpr double kExplainedShare = 0.5;
 constexpr double kAttachedTolerance_m = 0.03;
 constexpr double kAttachedTime_s = 1.0;
 constexpr double kAttachedRange_m = 1.5;
+// An object most of whose beams return ranges their beams returned in at least kRecurringShare of
+// the recent scans (within kRecurringTolerance_m plus kRecurringRelativeTolerance of the range; an
+// exponential average, each scan weighing kRecurringWeight: five scans in a row from nothing),
+// within kRecurringRange_m of the sensor, is part of the robot too, even when it flickers in and
+// out of the scan (a flap, a cable, a bumper at a grazing angle). Nothing else stands that close
+// to the scanner while the robot drives. Farther out the same evidence would keep someone who
+// walks beside the robot at its speed, whom SLAM takes for part of the robot and must not see.
+constexpr float kRecurringRange_m = 0.35F;
+constexpr float kRecurringTolerance_m = 0.03F;
+constexpr float kRecurringRelativeTolerance = 0.01F;
+constexpr float kRecurringWeight = 1.0F / 16.0F;
+constexpr float kRecurringShare = 0.25F;
+// A scan counts only when the sensor has moved this far or turned this much since the last one
+// counted.
+constexpr double kRecurringMove_m = 0.05;
+constexpr double kRecurringTurn_rad = 0.035;
+constexpr double kRecurringObjectShare = 0.5;
 
 // Fragments are absorbed by dynamic tracks seen in this scan or missed for a few scans at most.
 constexpr std::int32_t kFragmentMaxMissed = 2;
@@ -79,7 +108,7 @@ void DynamicFilter::reset() {
   tracks_.clear();
   free_space_.clear();
   registration_.reset();
-  have_previous_ = false;
+  have_previous_ = false;  // recurring_ is kept: the robot's parts are where they were.
 }
 
 void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& sensor_pose,
@@ -105,7 +134,10 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   place_beams(scan, pose);
   segmenter_.segment(scan, out.segmentation);
   observe(out.segmentation, pose, scan.range_max_m);
-  if (registering) explain(scan, out.segmentation);
+  if (registering) {
+    explain(scan, out.segmentation);
+    recur(scan, out.segmentation, pose, checked.learn);
+  }
   match(scan.stamp_s);
   if (checked.learn) {
     update_velocities(scan.stamp_s);
@@ -256,6 +288,7 @@ void DynamicFilter::observe(const Segmentation& segmentation, const Pose2& senso
     }
     obs.explained_share = 0.0;
     obs.local_centroid = o.centroid_m;
+    obs.recurring_share = 0.0;
     obs.trusted[kFirst] =
         edge_trusted(o.before_first) && !at_range_limit(o.before_first, o.first_point_m);
     obs.trusted[kLast] =
@@ -265,6 +298,73 @@ void DynamicFilter::observe(const Segmentation& segmentation, const Pose2& senso
     obs.ambiguous = edge_at_view_limit(o.before_first) || edge_at_view_limit(o.after_last);
     obs.extent_m = (o.last_point_m - o.first_point_m).norm();
     obs.point_count = o.point_count;
+  }
+}
+
+// Each object's share of beams that return a range their beam has often returned (see
+// RecurringRange), then this scan's ranges counted.
+void DynamicFilter::recur(const LaserScan& scan, const Segmentation& segmentation,
+                          const Pose2& sensor_pose, bool learn) {
+  if (recurring_.size() != kRecurringSlots * scan.size()) {
+    recurring_.assign(kRecurringSlots * scan.size(), RecurringRange{});
+    recurring_scans_ = 0;
+    recurring_pose_.reset();
+  }
+  // Only a scan taken after the sensor has moved tells what moves with it: while it stands, the
+  // world (a walker's foot planted for a step) is still in its frame too.
+  if (learn) {
+    const bool moved =
+        !recurring_pose_ ||
+        (sensor_pose.translation() - recurring_pose_->translation()).norm() >= kRecurringMove_m ||
+        std::abs(wrap_angle(sensor_pose.yaw_rad - recurring_pose_->yaw_rad)) >= kRecurringTurn_rad;
+    learn = moved;
+  }
+  if (learn) {
+    ++recurring_scans_;
+    recurring_pose_ = sensor_pose;
+  }
+  const float keep = 1.0F - kRecurringWeight;
+  // A slot's share as of the last scan counted before this one (each counted scan that did not
+  // return its range decays it).
+  const std::uint32_t previous = learn ? recurring_scans_ - 1 : recurring_scans_;
+  explained_count_.assign(segmentation.objects.size(), 0);
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    if (!scan.is_valid(b) || scan.ranges_m[b] > kRecurringRange_m) continue;
+    const float r = scan.ranges_m[b];
+    const float tolerance = kRecurringTolerance_m + kRecurringRelativeTolerance * r;
+    RecurringRange* slots = &recurring_[kRecurringSlots * b];
+    RecurringRange* match = nullptr;
+    RecurringRange* weakest = slots;
+    for (std::size_t k = 0; k < kRecurringSlots; ++k) {
+      RecurringRange& slot = slots[k];
+      if (slot.scan < previous) {
+        slot.share *= std::pow(keep, static_cast<float>(previous - slot.scan));
+        slot.scan = previous;
+      }
+      if (std::abs(slot.range_m - r) <= tolerance &&
+          (match == nullptr || slot.share > match->share)) {
+        match = &slot;
+      }
+      if (slot.share < weakest->share) weakest = &slot;
+    }
+    const std::int32_t o = segmentation.beam_labels[b];
+    if (o >= 0 && match != nullptr && match->share >= kRecurringShare) {
+      ++explained_count_[static_cast<std::size_t>(o)];
+    }
+    if (!learn) continue;
+    // This scan counts: the range it returned goes up (a new range takes the weakest slot); the
+    // other slot decays when it is next brought up to date.
+    if (match == nullptr) {
+      match = weakest;
+      match->range_m = r;
+      match->share = 0.0F;
+    }
+    match->share = match->share * keep + kRecurringWeight;
+    match->scan = recurring_scans_;
+  }
+  for (std::size_t i = 0; i < segmentation.objects.size(); ++i) {
+    observations_[i].recurring_share =
+        static_cast<double>(explained_count_[i]) / std::max(1, segmentation.objects[i].point_count);
   }
 }
 
@@ -379,14 +479,29 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
       }
     }
   }
+  const double moved = (obs.points[kCentroid] - track.marked_at).norm();
+  const double elapsed = stamp_s - track.marked_s;
+  if (track.free_space_pending && elapsed >= kFreeSpaceDecision_s) {
+    // Decided once, when the object has had time to move (see kFreeSpaceDecision_s): confirmed
+    // when it has moved as a walker can, or it is beside a track that has; else refuted.
+    track.free_space_pending = false;
+    const bool moved_plausibly =
+        moved > kFreeSpaceConfirm_m && moved <= kFreeSpaceConfirm_m + kMaxWalkerSpeed_mps * elapsed;
+    if (!moved_plausibly && !beside_moving_track(track, obs.points[kCentroid])) {
+      track.free_space_refuted = true;
+      track.cls = initial_class_state(cc);
+      ++counters_.free_space_refuted;
+    }
+  }
   // Part of the robot: still in the sensor frame for long, near it.
   if ((obs.local_centroid - track.local_anchor).norm() > kAttachedTolerance_m) {
     track.local_anchor = obs.local_centroid;
     track.local_still_since_s = stamp_s;
   }
-  const bool attached = config_.registration.enabled &&
-                        stamp_s - track.local_still_since_s >= kAttachedTime_s &&
-                        obs.local_centroid.norm() <= kAttachedRange_m;
+  const bool attached =
+      config_.registration.enabled && ((stamp_s - track.local_still_since_s >= kAttachedTime_s &&
+                                        obs.local_centroid.norm() <= kAttachedRange_m) ||
+                                       obs.recurring_share >= kRecurringObjectShare);
   if (attached) evidence = MotionEvidence::kSlow;
   track.cls = update_class_state(track.cls, evidence, cc);
   if (attached && track.cls.object_class != ObjectClass::kStatic) {
@@ -411,6 +526,10 @@ void DynamicFilter::start_tracks(double stamp_s) {
     if (parent_of_object_[i] >= 0) {
       const Track& from = tracks_[parent_of_object_[i]];
       track.cls = from.cls;
+      track.free_space_pending = from.free_space_pending;
+      track.free_space_refuted = from.free_space_refuted;
+      track.marked_at = from.marked_at;
+      track.marked_s = from.marked_s;
       track.age_scans = from.age_scans;
       for (PointVelocityFilter& kf : track.kf) kf.set_velocity(from.kf[kCentroid].velocity());
       track.speed_mps = from.speed_mps;
@@ -446,11 +565,18 @@ DynamicFilter::Track DynamicFilter::new_track(const Observation& obs, double sta
 // map knows, hit since) has moved there: it is dynamic at once, unless it is too large to be.
 void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan,
                                                const Segmentation& segmentation) {
+  // The space must have been seen through by beams dense enough to hit the object: at most half
+  // its width apart (a chair leg seen close was missed, not absent, by beams 3 cm apart at 5 m).
+  spacing_limit_.resize(segmentation.objects.size());
+  for (std::size_t i = 0; i < segmentation.objects.size(); ++i) {
+    const ScanObject& o = segmentation.objects[i];
+    spacing_limit_[i] = 0.5 * (o.last_point_m - o.first_point_m).norm();
+  }
   std::vector<std::int32_t> in_free(segmentation.objects.size(), 0);
   for (std::size_t b = 0; b < scan.size(); ++b) {
     const std::int32_t o = segmentation.beam_labels[b];
     if (o < 0) continue;
-    if (free_space_.known_free(beam_points_[b])) {
+    if (free_space_.known_free(beam_points_[b], spacing_limit_[static_cast<std::size_t>(o)])) {
       ++in_free[static_cast<std::size_t>(o)];
     }
   }
@@ -462,9 +588,13 @@ void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan,
       continue;
     }
     if (observations_[i].explained_share >= kExplainedShare) continue;
+    if (observations_[i].recurring_share >= kRecurringObjectShare) continue;
     Track& t = tracks_[static_cast<std::size_t>(track_of_object_[i])];
-    if (t.age_scans > kFreeSpaceMaxAge) continue;
+    if (t.age_scans > kFreeSpaceMaxAge || t.free_space_refuted) continue;
     if (t.cls.object_class != ObjectClass::kDynamic) {
+      t.free_space_pending = true;
+      t.marked_at = observations_[i].points[kCentroid];
+      t.marked_s = scan.stamp_s;
       t.cls.object_class = ObjectClass::kDynamic;
       t.cls.dynamic_weight =
           std::max(t.cls.dynamic_weight, config_.classification.dynamic_weight_limit);
@@ -569,6 +699,22 @@ BeamLabel DynamicFilter::beam_label(const LaserScan& scan, std::size_t b,
     }
   }
   return v.object_class == ObjectClass::kDynamic ? BeamLabel::kDynamic : BeamLabel::kUnknown;
+}
+
+// Whether a dynamic track other than @p self, confirmed by its motion (not only by free space) and
+// seen in the last few scans, is within companion_distance_m of @p point_m: the other leg of a
+// walker whose planted foot has not moved while its free-space evidence was weighed.
+bool DynamicFilter::beside_moving_track(const Track& self, const Eigen::Vector2d& point_m) const {
+  const double limit = config_.tracking.companion_distance_m;
+  if (!(limit > 0.0)) return false;
+  for (const Track& t : tracks_) {
+    if (&t == &self || t.cls.object_class != ObjectClass::kDynamic || t.free_space_pending ||
+        t.missed_scans > kFragmentMaxMissed) {
+      continue;
+    }
+    if ((t.kf[kCentroid].position() - point_m).norm() <= limit) return true;
+  }
+  return false;
 }
 
 // Whether a point lies within fragment_distance_m of the outline (edge to edge, predicted to now)

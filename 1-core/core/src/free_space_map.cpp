@@ -71,21 +71,39 @@ bool FreeSpaceMap::index_of(const Eigen::Vector2d& p, std::int64_t& index) const
   return true;
 }
 
+bool FreeSpaceMap::cell_free(const Eigen::Vector2d& p) const {
+  std::int64_t i = 0;
+  if (!index_of(p, i)) return false;
+  const Cell& cell = cells_[static_cast<std::size_t>(i)];
+  return cell.balance <= -config_.min_free_observations &&
+         stamp_s_ - (epoch_s_ + cell.last_free_s) <= config_.memory_s;
+}
+
 bool FreeSpaceMap::known_free(const Eigen::Vector2d& point_m) const {
   const double c = config_.cell_size_m;
   const int n = config_.neighbourhood_cells;
-  const auto free = [&](const Eigen::Vector2d& p) {
-    std::int64_t i = 0;
-    if (!index_of(p, i)) return false;
-    const Cell& cell = cells_[static_cast<std::size_t>(i)];
-    return cell.balance <= -config_.min_free_observations &&
-           stamp_s_ - cell.last_free_stamp_s <= config_.memory_s;
-  };
   // The point's own cell first: most points asked about (a surface's) fail there.
-  if (!free(point_m)) return false;
+  if (!cell_free(point_m)) return false;
   for (int dx = -n; dx <= n; ++dx) {
     for (int dy = -n; dy <= n; ++dy) {
-      if ((dx != 0 || dy != 0) && !free(point_m + Eigen::Vector2d(dx * c, dy * c))) return false;
+      if ((dx != 0 || dy != 0) && !cell_free(point_m + Eigen::Vector2d(dx * c, dy * c))) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+bool FreeSpaceMap::known_free(const Eigen::Vector2d& point_m, double max_beam_spacing_m) const {
+  if (!known_free(point_m)) return false;
+  const double c = config_.cell_size_m;
+  const double limit = max_beam_spacing_m / kSpacingUnit_m;
+  for (int dx = -1; dx <= 1; ++dx) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      std::int64_t i = 0;
+      if (!index_of(point_m + Eigen::Vector2d(dx * c, dy * c), i)) return false;
+      const std::uint8_t s = cells_[static_cast<std::size_t>(i)].finest_spacing;
+      if (s == kNeverSeenThrough || static_cast<double>(s) > limit) return false;
     }
   }
   return true;
@@ -106,7 +124,10 @@ constexpr std::size_t kCoarsestStride = 16;
 
 void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
   const Eigen::Vector2d origin = sensor_pose.translation();
-  if (!placed_) recenter(origin);
+  if (!placed_) {
+    recenter(origin);
+    epoch_s_ = scan.stamp_s;
+  }
   std::int64_t probe = 0;
   const double keep = 0.25 * config_.extent_m;  // Re-centre well before the edge.
   if (!index_of(origin + Eigen::Vector2d(keep, keep), probe) ||
@@ -126,6 +147,9 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
   directions_.resize(scan.size());
   for (std::size_t b = 0; b < scan.size(); ++b) directions_[b] = to_fixed.rotate(unit[b]);
   const int cap = config_.min_free_observations + config_.max_recent_hits;
+  const auto free_s = static_cast<float>(scan.stamp_s - epoch_s_);
+  // Beam spacing per cell of range, in kSpacingUnit_m.
+  const double spacing_per_cell = std::abs(scan.angle_increment_rad) * c / kSpacingUnit_m;
   // Hits first: a cell hit in this scan counts as hit, whatever other beams passed through it.
   for (std::size_t b = 0; b < scan.size(); ++b) {
     if (!scan.is_valid(b)) continue;
@@ -178,6 +202,7 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     double next_x = dir.x() != 0.0 ? (step_x > 0 ? cx + 1.0 - fx : fx - cx) * delta_x : inf;
     double next_y = dir.y() != 0.0 ? (step_y > 0 ? cy + 1.0 - fy : fy - cy) * delta_y : inf;
     const double length = (free_until - start) / c;
+    const double start_cells = start / c;
     double t = 0.0;
     while (t < length && ix >= 0 && iy >= 0 && ix < cells_per_side_ && iy < cells_per_side_) {
       Cell& cell = cells_[static_cast<std::size_t>(cell_index(ix, iy))];
@@ -185,7 +210,12 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
         cell.last_scan = scans_;
         cell.balance = static_cast<std::int16_t>(std::max(cell.balance - 1, -cap));
         cell.occupied = static_cast<std::int16_t>(std::max(cell.occupied - 1, 0));
-        cell.last_free_stamp_s = scan.stamp_s;
+        cell.last_free_s = free_s;
+        // Where the beam leaves the cell (the spacing is largest there).
+        const double spacing = (start_cells + std::min(next_x, next_y)) * spacing_per_cell;
+        if (spacing < static_cast<double>(cell.finest_spacing)) {
+          cell.finest_spacing = static_cast<std::uint8_t>(spacing);
+        }
       }
       if (next_x < next_y) {
         t = next_x;

@@ -46,6 +46,23 @@ TEST(FreeSpaceMap, SpaceSeenThroughIsFreeButNotTheSurfaceOrBeyondIt) {
   EXPECT_FALSE(map.known_free({1.0, 0.0}));
 }
 
+TEST(FreeSpaceMap, ThinThingsNeedSpaceSeenThroughByBeamsDenseEnoughToHitThem) {
+  // ring()'s beams are 0.5 degrees apart: 8.7 mm at 1 m, 44 mm at 5 m. A chair leg 2 cm wide at
+  // 5 m can sit between two beams; at 1 m it cannot.
+  FreeSpaceConfig c;
+  FreeSpaceMap map(c);
+  for (int k = 0; k < 3; ++k) map.add_scan(ring(8.0F), Pose2{});
+  const Eigen::Vector2d far(5.0, 0.0);
+  EXPECT_TRUE(map.known_free(far));
+  EXPECT_TRUE(map.known_free(far, 0.05));   // Beams 44 mm apart there: a 10 cm thing is hit.
+  EXPECT_FALSE(map.known_free(far, 0.01));  // A 2 cm thing could have been missed.
+  // The same place seen through from 1 m away (the sensor 4 m along x): dense enough now.
+  for (int k = 0; k < 3; ++k) map.add_scan(ring(8.0F), Pose2{4.0, 0.0, 0.0});
+  EXPECT_TRUE(map.known_free(far, 0.01));
+  EXPECT_FALSE(map.known_free(far, 0.001));
+  EXPECT_FALSE(map.known_free({-1.0, 0.0}, 1.0));  // Never in view.
+}
+
 TEST(FreeSpaceMap, BeamsWithoutReturnSeeThroughUpToTheirReach) {
   FreeSpaceConfig c;
   c.free_range_m = 6.0;

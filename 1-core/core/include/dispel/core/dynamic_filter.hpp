@@ -62,6 +62,9 @@ struct FilterCounters {
   /// Beams of dynamic tracks kept because they end where something has stood for a while
   /// (free_space.keep_long_occupied).
   std::int64_t beams_kept_long_occupied = 0;
+  /// Tracks made dynamic by free space that then stood still (static again; see
+  /// free_space.md in docs/dynamic_filter.md).
+  std::int64_t free_space_refuted = 0;
   /// Beams of no object removed as fragments of a dynamic track (tracking.fragment_distance_m);
   /// included in beams_removed_dynamic.
   std::int64_t beams_removed_fragments = 0;
@@ -160,6 +163,7 @@ class DynamicFilter {
     std::int32_t point_count;
     double explained_share;          // Of its beams, the share the registered map explains.
     Eigen::Vector2d local_centroid;  // In the sensor frame.
+    double recurring_share;          // Of its beams, the share ending where they often end.
   };
   struct Track {
     std::uint64_t id;
@@ -177,6 +181,14 @@ class DynamicFilter {
     // the robot (or something it carries) moves with the sensor.
     Eigen::Vector2d local_anchor;
     double local_still_since_s;
+    // Dynamic because it appeared in space seen free, not yet confirmed by its own motion: where
+    // and when it was. Something that then stays put was there all along, below or above the
+    // scan plane where the beams passed (a chair seat, a shelf's edge: a tilted plane sees it
+    // only within some range); it is static again and free space never marks it again.
+    bool free_space_pending = false;
+    bool free_space_refuted = false;
+    Eigen::Vector2d marked_at = Eigen::Vector2d::Zero();
+    double marked_s = 0.0;
   };
 
   // What the first step decides about a scan.
@@ -191,6 +203,9 @@ class DynamicFilter {
   void place_beams(const LaserScan& scan, const Pose2& sensor_pose);
   void observe(const Segmentation& segmentation, const Pose2& sensor_pose, float range_max_m);
   void explain(const LaserScan& scan, const Segmentation& segmentation);
+  bool beside_moving_track(const Track& self, const Eigen::Vector2d& point_m) const;
+  void recur(const LaserScan& scan, const Segmentation& segmentation, const Pose2& sensor_pose,
+             bool learn);
   void match(double stamp_s);
   void update_velocities(double stamp_s);
   void classify(const LaserScan& scan, const Pose2& sensor_pose, const Segmentation& segmentation);
@@ -227,8 +242,25 @@ class DynamicFilter {
   BeamDirections directions_;                  // The scanner's beam directions.
   std::vector<Eigen::Vector2d> beam_points_;   // Per beam of this scan, fixed frame (NaN: invalid).
   std::vector<std::int32_t> explained_count_;  // Scratch: per object.
-  std::vector<char> keep_;                     // Scratch: beams the map learns.
-  std::optional<Pose2> previous_input_pose_;   // The pose given with the previous scan.
+  // Ranges each beam has often returned: per beam, kRecurringSlots ranges, each with the share of
+  // recent scans that returned it (an exponential average, decayed lazily: its value and the scan
+  // it was last brought up to date). Whatever moves with the sensor (a part of the robot, even
+  // one that flickers in and out of the scan; a return the scanner repeats) is at the same
+  // ranges of the same beams scan after scan; the world, seen from a moving robot, is not.
+  struct RecurringRange {
+    float range_m = 0.0F;
+    float share = 0.0F;
+    std::uint32_t scan = 0;
+  };
+  static constexpr std::size_t kRecurringSlots = 2;
+  std::vector<RecurringRange> recurring_;  // kRecurringSlots per beam.
+  std::uint32_t recurring_scans_ = 0;      // Scans counted (see recur()).
+  std::optional<Pose2> recurring_pose_;
+  float recurring_travel_m_ = 0.0F;    // The sensor's path over the scans counted.       // The
+                                       // sensor's pose at the last one counted.
+  std::vector<double> spacing_limit_;  // Scratch: per object, for free-space evidence.
+  std::vector<char> keep_;             // Scratch: beams the map learns.
+  std::optional<Pose2> previous_input_pose_;  // The pose given with the previous scan.
   std::uint64_t next_id_ = 1;
   bool have_previous_ = false;
   double previous_stamp_s_ = 0.0;

@@ -65,6 +65,12 @@ class FreeSpaceMap {
 
   /// True when every cell within neighbourhood_cells of the point's cell is known free.
   bool known_free(const Eigen::Vector2d& point_m) const;
+  /// known_free(), and the point's cell and its eight neighbours were seen through by beams at
+  /// most @p max_beam_spacing_m apart (range times angle increment, where the beams crossed the
+  /// cell) in one of the scans counted: dense enough that an object of twice that width could not
+  /// have stood there unseen. Beams farther apart pass each side of a thin thing (a chair leg, a
+  /// railing's bar) and see "through" it; the same thing seen close later did not arrive there.
+  bool known_free(const Eigen::Vector2d& point_m, double max_beam_spacing_m) const;
 
   /// Scans the point's cell has been hit in more than seen through, between 0 and
   /// 2 * long_occupied_scans (0 outside the window).
@@ -82,11 +88,17 @@ class FreeSpaceMap {
 
  private:
   struct Cell {
-    double last_free_stamp_s = 0.0;  // When a beam last saw through it.
-    std::uint32_t last_scan = 0;     // The scan that last counted for it (counts once per scan).
-    std::int16_t balance = 0;        // Scans hit minus scans seen through, clamped.
-    std::int16_t occupied = 0;       // The same, clamped to [0, 2 * long_occupied_scans].
+    float last_free_s = 0.0F;     // When a beam last saw through it, seconds after epoch_s_.
+    std::uint32_t last_scan = 0;  // The scan that last counted for it (counts once per scan).
+    std::int16_t balance = 0;     // Scans hit minus scans seen through, clamped.
+    std::int16_t occupied = 0;    // The same, clamped to [0, 2 * long_occupied_scans].
+    /// The finest beam spacing it was seen through at, in kSpacingUnit_m (kNeverSeenThrough:
+    /// never), since the window was placed.
+    std::uint8_t finest_spacing = kNeverSeenThrough;
   };
+  static constexpr std::uint8_t kNeverSeenThrough = 255;
+  static constexpr double kSpacingUnit_m = 0.002;
+  bool cell_free(const Eigen::Vector2d& p) const;
   bool index_of(const Eigen::Vector2d& p, std::int64_t& index) const;
   /// Cells are stored in square tiles of kTileSide x kTileSide (a beam crosses cells near each
   /// other in memory, whatever its direction); the index of cell (ix, iy) of the window.
@@ -106,6 +118,7 @@ class FreeSpaceMap {
   bool placed_ = false;
   std::uint32_t scans_ = 0;
   double stamp_s_ = 0.0;  // Of the latest scan.
+  double epoch_s_ = 0.0;  // Cells keep their stamps relative to this (the first scan's stamp).
   std::vector<Cell> cells_;
   std::vector<double> free_until_;           // Scratch: per beam, how far it saw free space.
   std::vector<Eigen::Vector2d> directions_;  // Scratch: per beam, its direction.

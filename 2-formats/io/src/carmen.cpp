@@ -7,6 +7,7 @@
 
 #include "dispel/core/pose2.hpp"
 #include "dispel/io/errors.hpp"
+#include "dispel/io/text.hpp"
 
 namespace dispel::io {
 namespace {
@@ -28,15 +29,15 @@ struct Fields {
       used = 0;
     }
     if (used != w.size() || used == 0) {
-      throw std::runtime_error(std::string(what) + " is not a number: '" + w + "'");
+      throw std::runtime_error(std::string(what) + " is not a number: " + quote(w));
     }
     return v;
   }
   std::int64_t count(const char* what, std::size_t max) {
     const double v = number(what);
     if (v < 0 || v != std::floor(v) || v > static_cast<double>(max)) {
-      throw std::runtime_error(std::string(what) + " is not a valid count: '" + words[next - 1] +
-                               "'");
+      throw std::runtime_error(std::string(what) +
+                               " is not a valid count: " + quote(words[next - 1]));
     }
     return static_cast<std::int64_t>(v);
   }

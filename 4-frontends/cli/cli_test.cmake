@@ -241,3 +241,110 @@ expect_error_no_output("unknown picture format" ${WORK_DIR}/eval.gif
                        eval --truth ${sim} --result ${WORK_DIR}/sim_filtered.bag
                        --plot ${WORK_DIR}/eval.gif)
 message(STATUS "dispel render contract holds")
+
+# Issue 16: write errors, outputs that would destroy inputs, files that are not files, numbers
+# that are not finite, unbounded echoes. Each: one line naming the problem, the exit code, no
+# output and no OUT.partial, all before any work where the command line already tells.
+function(expect_refused code expected output)
+  if(NOT output MATCHES "^/dev/")  # Never remove a device (the test may run as root).
+    file(REMOVE ${output} ${output}.partial)
+  endif()
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE so ERROR_VARIABLE se
+                  TIMEOUT 120)
+  string(STRIP "${se}" line)
+  string(LENGTH "${line}" length)
+  if(NOT rc STREQUAL "${code}" OR NOT line MATCHES "${expected}" OR line MATCHES "\n"
+     OR length GREATER 500 OR EXISTS ${output}.partial)
+    message(FATAL_ERROR "'${ARGN}': expected exit ${code} and one line matching '${expected}' "
+                        "and no ${output}.partial; got ${rc}:\n${se}")
+  endif()
+  if(NOT output MATCHES "^/dev/" AND EXISTS ${output})
+    message(FATAL_ERROR "'${ARGN}' left ${output}")
+  endif()
+endfunction()
+# A file-size limit as a full disk would set it: 64 blocks of 512 or 1024 bytes.
+set(limited sh -c "ulimit -f 64 && exec \"$@\"" limited)
+
+# Item 4: /dev/full and a file-size limit, for filter, odom, sim and --stats.
+expect_refused(1 "^dispel filter: /dev/full: cannot write .*No space left on device" /dev/full
+               ${DISPEL} filter ${BAG} -o /dev/full --static-sensor)
+expect_refused(1 "^dispel filter: .*out.bag: cannot write the bag .*File too large" ${out}
+               ${limited} ${DISPEL} filter ${BAG} -o ${out} --static-sensor)
+expect_refused(1 "^dispel odom: /dev/full: cannot write .No space left on device" /dev/full
+               ${DISPEL} odom ${sim} -o /dev/full)
+expect_refused(1 "^dispel odom: .*traj_limited.csv: cannot write .File too large" ${WORK_DIR}/traj_limited.csv
+               ${limited} ${DISPEL} odom ${SOURCE_DIR}/data/robot_localization/test1.bag
+               -o ${WORK_DIR}/traj_limited.csv --wheel-topic /husky_velocity_controller/odom)
+expect_refused(1 "^dispel sim: /dev/full: cannot write .*No space left on device" /dev/full
+               ${DISPEL} sim ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o /dev/full
+               --duration 4)
+expect_refused(1 "^dispel sim: .*sim_limited.bag: cannot write the bag .*File too large"
+               ${WORK_DIR}/sim_limited.bag ${limited} ${DISPEL} sim
+               ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o ${WORK_DIR}/sim_limited.bag
+               --duration 30)
+expect_refused(1 "^dispel filter: statistics not written: /dev/full: cannot write .No space left"
+               /dev/full ${DISPEL} filter ${BAG} -o ${WORK_DIR}/stats_full.bag --static-sensor
+               --stats /dev/full)
+file(REMOVE ${WORK_DIR}/stats_full.bag)
+message(STATUS "write errors: one line, exit 1, nothing left behind")
+
+# Item 7: no output may be an input or another output; every output's directory exists; checked
+# before any work (the bag of the --stats nodir/ case is never written).
+expect_refused(1 "--stats '.*out.bag' and -o '.*out.bag' are the same file" ${out}
+               ${DISPEL} filter ${BAG} -o ${out} --stats ${out} --static-sensor)
+file(WRITE ${WORK_DIR}/in.log "# a CARMEN log that must survive\n")
+expect_refused(1 "-o '.*in.log' is the same file as the input '.*in.log'; the input would be"
+               /dev/null ${DISPEL} filter ${WORK_DIR}/in.log -o ${WORK_DIR}/../cli_test/in.log)
+file(READ ${WORK_DIR}/in.log kept)
+if(NOT kept STREQUAL "# a CARMEN log that must survive\n")
+  message(FATAL_ERROR "filter in.log -o in.log changed in.log")
+endif()
+file(WRITE ${WORK_DIR}/w.csv "t,v_left,v_right\n0,1,1\n1,1,1\n")
+expect_refused(1 "-o '.*w.csv' is the same file as the input --wheels-csv" /dev/null
+               ${DISPEL} odom --wheels-csv ${WORK_DIR}/w.csv -o ${WORK_DIR}/w.csv)
+expect_refused(1 "--truth-csv '.*t.csv' and -o '.*t.csv' are the same file" ${WORK_DIR}/t.csv
+               ${DISPEL} odom ${sim} -o ${WORK_DIR}/t.csv --truth-csv ${WORK_DIR}/./t.csv)
+expect_refused(1 "--stats '.*nodir/s.json': the directory '.*nodir' does not exist" ${out}
+               ${DISPEL} filter ${BAG} -o ${out} --stats ${WORK_DIR}/nodir/s.json --static-sensor)
+expect_refused(1 "--config '.*': not a regular file .a directory." ${out}
+               ${DISPEL} filter ${BAG} -o ${out} --config ${WORK_DIR} --static-sensor)
+execute_process(COMMAND mkfifo ${WORK_DIR}/fifo.yaml)
+expect_refused(1 "--config '.*fifo.yaml': not a regular file .a FIFO." ${out}
+               ${DISPEL} filter ${BAG} -o ${out} --config ${WORK_DIR}/fifo.yaml --static-sensor)
+expect_refused(1 "^dispel sim: '.*fifo.yaml': not a regular file .a FIFO." ${WORK_DIR}/x.bag
+               ${DISPEL} sim ${WORK_DIR}/fifo.yaml -o ${WORK_DIR}/x.bag)
+file(WRITE ${WORK_DIR}/empty.yaml "")
+expect_refused(1 "^dispel sim: .*empty.yaml: the scenario file is empty$" ${WORK_DIR}/x.bag
+               ${DISPEL} sim ${WORK_DIR}/empty.yaml -o ${WORK_DIR}/x.bag)
+file(WRITE ${WORK_DIR}/nan_wall.yaml "world: {walls: [[0, 0, .nan, 1]]}\n")
+expect_refused(1 "world.walls.0..2. must be a finite number, got '.nan'" ${WORK_DIR}/x.bag
+               ${DISPEL} sim ${WORK_DIR}/nan_wall.yaml -o ${WORK_DIR}/x.bag)
+# Command-line errors: the usage exit code 2, one line, a readable bound.
+expect_refused(2 "^dispel sim: --duration: must be a finite number > 0, got nan " ${WORK_DIR}/x.bag
+               ${DISPEL} sim ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o ${WORK_DIR}/x.bag
+               --duration nan)
+expect_refused(2 "^dispel sim: --duration: must be a finite number > 0, got -1 " ${WORK_DIR}/x.bag
+               ${DISPEL} sim ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o ${WORK_DIR}/x.bag
+               --duration -1)
+expect_refused(2 "^dispel render: --from: 'inf' is not a finite number" ${WORK_DIR}/x.png
+               ${DISPEL} render ${BAG} -o ${WORK_DIR}/x.png --from inf)
+expect_refused(2 "^dispel filter: .*--output is required" ${out} ${DISPEL} filter ${BAG})
+# An echoed input is cut (a 100 kB key would have been a 100 kB line).
+string(REPEAT "k" 100000 long_value)
+file(WRITE ${WORK_DIR}/long_key.yaml "segmentation:\n  cluster_gap_m: ${long_value}\n")
+expect_refused(1 "cluster_gap_m must be a number, got 'kkkk.*'... .100000 bytes.$" ${out}
+               ${DISPEL} filter ${BAG} -o ${out} --config ${WORK_DIR}/long_key.yaml --static-sensor)
+
+# Ctrl-C during dispel sim: interrupted with nothing written, or done with a complete bag.
+foreach(delay 0.3 1.0 2.0)
+  set(sim_out ${WORK_DIR}/sim_interrupted.bag)
+  file(REMOVE ${sim_out})
+  execute_process(COMMAND timeout --preserve-status -s INT ${delay} ${DISPEL} sim
+                          ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o ${sim_out} --duration 600
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE so ERROR_VARIABLE se)
+  if(EXISTS ${sim_out}.partial OR (rc EQUAL 130 AND EXISTS ${sim_out})
+     OR NOT (rc EQUAL 130 OR rc EQUAL 0))
+    message(FATAL_ERROR "dispel sim under SIGINT after ${delay} s: exit ${rc}, ${se}")
+  endif()
+endforeach()
+message(STATUS "issue 16 contract holds")

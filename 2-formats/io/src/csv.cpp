@@ -110,6 +110,10 @@ struct CsvWriter::Impl {
   std::string path;
   AtomicFile file;
   std::FILE* f = nullptr;
+  int first_error = 0;  ///< errno of the first write that failed (ENOSPC, EFBIG), 0 if none.
+  void check(int result) {
+    if (result < 0 && first_error == 0) first_error = errno != 0 ? errno : EIO;
+  }
 };
 
 CsvWriter::CsvWriter(const std::string& path) : impl_(std::make_unique<Impl>(path)) {
@@ -124,14 +128,14 @@ CsvWriter::~CsvWriter() {
 }
 
 void CsvWriter::line(const std::string& text) {
-  std::fputs(text.c_str(), impl_->f);
-  std::fputc('\n', impl_->f);
+  impl_->check(std::fputs(text.c_str(), impl_->f));
+  impl_->check(std::fputc('\n', impl_->f));
 }
 
 void CsvWriter::printf(const char* format, ...) {
   va_list args;
   va_start(args, format);
-  std::vfprintf(impl_->f, format, args);
+  impl_->check(std::vfprintf(impl_->f, format, args));
   va_end(args);
 }
 
@@ -142,8 +146,8 @@ void CsvWriter::close() {
   const int error = errno;
   const bool closed = std::fclose(impl_->f) == 0;
   impl_->f = nullptr;
-  if (!ok || !closed) {
-    const int reason = error != 0 ? error : errno;
+  if (!ok || !closed || impl_->first_error != 0) {
+    const int reason = impl_->first_error != 0 ? impl_->first_error : error != 0 ? error : errno;
     throw OutputError(impl_->path + ": cannot write (" +
                       (reason != 0 ? std::strerror(reason) : "writing failed") + ")");
   }

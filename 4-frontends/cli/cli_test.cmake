@@ -348,3 +348,26 @@ foreach(delay 0.3 1.0 2.0)
   endif()
 endforeach()
 message(STATUS "issue 16 contract holds")
+
+# Issue 16 item 1: a CARMEN log whose time counts from 0 (as the classic corrected logs): filtered
+# with its stamps shifted by 1 s (said on stderr), and the output renders.
+set(carmen_out ${WORK_DIR}/carmen_from0.bag)
+file(REMOVE ${carmen_out})
+run_dispel(rc so se filter ${SOURCE_DIR}/data/carmen/leg_tracker_from0.log -o ${carmen_out}
+           --stats ${WORK_DIR}/carmen_stats.json)
+if(NOT rc EQUAL 0 OR NOT so MATCHES "100 scans" OR NOT se MATCHES "counts time from 0: every stamp is shifted by \\+1 s")
+  message(FATAL_ERROR "dispel filter on a CARMEN log from time 0 failed (${rc}): ${so}${se}")
+endif()
+file(READ ${WORK_DIR}/carmen_stats.json carmen_stats)
+string(JSON offset GET "${carmen_stats}" stamp_offset_s)
+if(NOT offset EQUAL 1)
+  message(FATAL_ERROR "stamp_offset_s ${offset}: ${carmen_stats}")
+endif()
+run_dispel(rc so se render ${carmen_out} -o ${WORK_DIR}/carmen.png --size 400x300)
+if(NOT rc EQUAL 0 OR NOT so MATCHES "100 scans" OR NOT EXISTS ${WORK_DIR}/carmen.png)
+  message(FATAL_ERROR "dispel render on a filtered CARMEN log failed (${rc}): ${so}${se}")
+endif()
+file(WRITE ${WORK_DIR}/wrapped.log "FLASER 3 1 1 1 0 0 0 0 0 0 5e9 host 0\n")
+expect_refused(1 "wrapped.log: line 1 .FLASER.: ipc_timestamp '5e9' is not a time a recording can hold"
+               ${out} ${DISPEL} filter ${WORK_DIR}/wrapped.log -o ${out})
+message(STATUS "CARMEN logs from time 0 filter and render")

@@ -80,7 +80,10 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
   // The scanner's period --scale-to-scanner carried the counts over with (null when not needed).
   j["scan_period_s"] =
       s.scan_period_s ? nlohmann::ordered_json(*s.scan_period_s) : nlohmann::ordered_json(nullptr);
-  if (s.input_format == "carmen") j["malformed_lines"] = s.malformed_lines;
+  if (s.input_format == "carmen") {
+    j["malformed_lines"] = s.malformed_lines;
+    j["stamp_offset_s"] = s.stamp_offset_s;
+  }
   j["odometry_refused"] = s.odometry_refused;
   return j;
 }

@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "bag_contents.hpp"
+#include "dispel/io/recording_motion.hpp"
 #include "dispel/io/ros1_messages.hpp"
 #include "dispel/sim/raycast.hpp"
 #include "test_files.hpp"
@@ -432,9 +433,47 @@ TEST(FilterJob, CarmenLogBecomesABagWithFilteredScans) {
   EXPECT_EQ(out.count.at("/scan"), 120u);
   EXPECT_EQ(out.count.at("/scan_filtered"), 120u);
   EXPECT_EQ(out.count.at("/scan_labels"), 120u);
-  EXPECT_EQ(out.count.at("/odom"), 120u);
+  EXPECT_EQ(out.count.at("/odom"), 120u);         // The laser lines' poses.
+  EXPECT_EQ(out.count.at("/carmen_odom"), 120u);  // The ODOM lines.
+  EXPECT_EQ(out.count.at("/tf_static"), 1u);
+  EXPECT_EQ(stats.stamp_offset_s, 0.0);  // Stamps from 5000 s: kept.
   EXPECT_EQ(out.scans.at("/scan").front().header.frame_id, "laser");
   std::remove(log_path.c_str());
+  std::remove(o.output.c_str());
+}
+
+// Issue 16: the classic corrected logs count time from 0, and a bag holds no time 0: every one
+// failed ("Tried to insert a message with time less than ros::TIME_MIN"). Now every stamp is
+// shifted by 1 s, and the output carries what render and slam need: /odom with the pose the
+// filter used and the laser's mount on /tf_static (read back by the same first pass as theirs).
+TEST(FilterJob, ACarmenLogFromTimeZeroIsShiftedAndCarriesOdometryAndMount) {
+  FilterJobOptions o;
+  o.input = source_path("data/carmen/leg_tracker_from0.log");
+  o.output = temp_path("from0.bag");
+  std::string notice;
+  const FilterJobStats stats =
+      run_filter_job(o, {}, nullptr, [&](const std::string& n) { notice += n; });
+  EXPECT_EQ(stats.scans, 100);
+  EXPECT_EQ(stats.scans_filtered, 100);
+  EXPECT_EQ(stats.stamp_offset_s, 1.0);
+  EXPECT_NE(notice.find("counts time from 0: every stamp is shifted by +1 s"), std::string::npos)
+      << notice;
+  EXPECT_GT(stats.counters.beams_removed_dynamic, 100);
+  const BagContents out = read_bag(o.output);
+  EXPECT_EQ(out.count.at("/odom"), 100u);
+  EXPECT_EQ(out.count.at("/tf_static"), 1u);
+  const auto& scans = out.scans.at("/scan");
+  ASSERT_EQ(scans.size(), 100u);
+  EXPECT_EQ(scans.front().header.stamp, ros::Time(1, 0));
+  EXPECT_NEAR((scans.back().header.stamp - scans.front().header.stamp).toSec(), 9.9, 0.05);
+
+  const std::unique_ptr<io::RecordingReader> bag = open_recording(o.output);
+  io::MotionQuery query;
+  query.scan_topic = "/scan";
+  query.pose_topic = "/odom";
+  const io::RecordingMotion motion = io::read_motion(*bag, query, [] {});
+  PoseLookup why = PoseLookup::kOk;
+  EXPECT_TRUE(motion.sensor_pose(scans[10].header.stamp.toSec(), &why)) << pose_lookup_name(why);
   std::remove(o.output.c_str());
 }
 

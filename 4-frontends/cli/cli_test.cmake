@@ -371,3 +371,23 @@ file(WRITE ${WORK_DIR}/wrapped.log "FLASER 3 1 1 1 0 0 0 0 0 0 5e9 host 0\n")
 expect_refused(1 "wrapped.log: line 1 .FLASER.: ipc_timestamp '5e9' is not a time a recording can hold"
                ${out} ${DISPEL} filter ${WORK_DIR}/wrapped.log -o ${out})
 message(STATUS "CARMEN logs from time 0 filter and render")
+
+# Issue 16 item 2: a sparse log (scans 5 s apart) resets the filter at nearly every scan: a
+# warning on stderr and scans.mostly_unfiltered in the statistics.
+string(REPEAT "2 " 181 ranges)
+set(sparse_log "")
+foreach(k RANGE 1 20)
+  math(EXPR t "5 * ${k}")
+  string(APPEND sparse_log "FLASER 181 ${ranges}0 0 0 0 0 0 ${t} host ${t}\n")
+endforeach()
+file(WRITE ${WORK_DIR}/sparse.log "${sparse_log}")
+run_dispel(rc so se filter ${WORK_DIR}/sparse.log -o ${WORK_DIR}/sparse.bag
+           --stats ${WORK_DIR}/sparse.json)
+file(READ ${WORK_DIR}/sparse.json sparse_stats)
+string(JSON mostly GET "${sparse_stats}" scans mostly_unfiltered)
+string(JSON reset GET "${sparse_stats}" scans reset)
+if(NOT rc EQUAL 0 OR NOT se MATCHES "warning: 19 of 20 scans reset the filter .19 after a time gap"
+   OR NOT mostly STREQUAL "ON" OR NOT reset EQUAL 19)
+  message(FATAL_ERROR "sparse log: no warning or statistics (${rc}): ${se}\n${sparse_stats}")
+endif()
+message(STATUS "a sparse log is reported")

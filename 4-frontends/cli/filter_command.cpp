@@ -34,10 +34,9 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
     skipped[reason] = n;
     skipped_total += n;
   }
-  j["scans"] = {{"total", s.scans},
-                {"processed", s.scans_filtered},
-                {"skipped", skipped_total},
-                {"skipped_by_reason", skipped}};
+  j["scans"] = {{"total", s.scans},         {"processed", s.scans_filtered},
+                {"skipped", skipped_total}, {"skipped_by_reason", skipped},
+                {"reset", s.scans_reset},   {"mostly_unfiltered", s.mostly_unfiltered}};
   nlohmann::ordered_json events;
   for (std::size_t e = 0; e < kFilterEventCount; ++e) {
     events[filter_event_name(static_cast<FilterEvent>(e))] = s.counters.events[e];
@@ -154,6 +153,8 @@ int run_filter(FilterCommandOptions options) {
   for (const auto& [reason, n] : stats.scans_skipped) {
     std::printf("  passed through: %lld scans, %s\n", static_cast<long long>(n), reason.c_str());
   }
+  std::fflush(stdout);
+  if (!stats.warning.empty()) std::cerr << "dispel filter: warning: " << stats.warning << "\n";
 
   if (!options.stats_path.empty()) {
     try {

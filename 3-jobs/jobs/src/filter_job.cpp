@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "dispel/io/carmen.hpp"
@@ -75,8 +76,39 @@ class ScanFilter {
     stats_.counters = runner_.filter_counters();
     stats_.config = runner_.config();
     stats_.scan_period_s = runner_.scan_period_s();
+    warn_when_mostly_unfiltered();
   }
 
+ private:
+  // A log whose scans mostly reset the filter or pass through is filtered into (almost) nothing;
+  // the summary alone ("0 dynamic removed") would not say so.
+  void warn_when_mostly_unfiltered() {
+    const auto event = [&](FilterEvent e) {
+      return stats_.counters.events[static_cast<std::size_t>(e)];
+    };
+    const std::int64_t gap = event(FilterEvent::kResetTimeGap);
+    const std::int64_t back = event(FilterEvent::kResetTimeBackwards);
+    const std::int64_t jump = event(FilterEvent::kResetPoseJump);
+    stats_.scans_reset = gap + back + jump;
+    std::int64_t passed = 0;
+    for (const auto& [reason, n] : stats_.scans_skipped) passed += n;
+    const std::int64_t unfiltered = stats_.scans_reset + passed;
+    stats_.mostly_unfiltered = stats_.scans > 0 && 2 * unfiltered > stats_.scans;
+    if (!stats_.mostly_unfiltered) return;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "%lld of %lld scans reset the filter (%lld after a time gap above "
+                  "max_time_gap_s %.3g s, %lld with time going back, %lld after a pose jump) "
+                  "and %lld were passed through unchanged: moving objects are hardly removed "
+                  "(a sparse or subsampled log?)",
+                  static_cast<long long>(stats_.scans_reset), static_cast<long long>(stats_.scans),
+                  static_cast<long long>(gap), stats_.config.max_time_gap_s,
+                  static_cast<long long>(back), static_cast<long long>(jump),
+                  static_cast<long long>(passed));
+    stats_.warning = text;
+  }
+
+ public:
  private:
   pipeline::ScanFilterRunner runner_;
   FilterJobStats& stats_;

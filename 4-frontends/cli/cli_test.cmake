@@ -286,6 +286,10 @@ expect_refused(1 "^dispel filter: statistics not written: /dev/full: cannot writ
                /dev/full ${DISPEL} filter ${BAG} -o ${WORK_DIR}/stats_full.bag --static-sensor
                --stats /dev/full)
 file(REMOVE ${WORK_DIR}/stats_full.bag)
+# The bag to /dev/null (a device: no file-size limit), the statistics under a 1-block limit.
+expect_refused(1 "^dispel filter: statistics not written: .*stats_limited.json: cannot write .File too large"
+               ${WORK_DIR}/stats_limited.json sh -c "ulimit -f 1 && exec \"$@\"" limited ${DISPEL}
+               filter ${BAG} -o /dev/null --static-sensor --stats ${WORK_DIR}/stats_limited.json)
 message(STATUS "write errors: one line, exit 1, nothing left behind")
 
 # Item 7: no output may be an input or another output; every output's directory exists; checked

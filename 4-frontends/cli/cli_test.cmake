@@ -241,3 +241,157 @@ expect_error_no_output("unknown picture format" ${WORK_DIR}/eval.gif
                        eval --truth ${sim} --result ${WORK_DIR}/sim_filtered.bag
                        --plot ${WORK_DIR}/eval.gif)
 message(STATUS "dispel render contract holds")
+
+# Issue 16: write errors, outputs that would destroy inputs, files that are not files, numbers
+# that are not finite, unbounded echoes. Each: one line naming the problem, the exit code, no
+# output and no OUT.partial, all before any work where the command line already tells.
+function(expect_refused code expected output)
+  if(NOT output MATCHES "^/dev/")  # Never remove a device (the test may run as root).
+    file(REMOVE ${output} ${output}.partial)
+  endif()
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE so ERROR_VARIABLE se
+                  TIMEOUT 120)
+  string(STRIP "${se}" line)
+  string(LENGTH "${line}" length)
+  if(NOT rc STREQUAL "${code}" OR NOT line MATCHES "${expected}" OR line MATCHES "\n"
+     OR length GREATER 500 OR EXISTS ${output}.partial)
+    message(FATAL_ERROR "'${ARGN}': expected exit ${code} and one line matching '${expected}' "
+                        "and no ${output}.partial; got ${rc}:\n${se}")
+  endif()
+  if(NOT output MATCHES "^/dev/" AND EXISTS ${output})
+    message(FATAL_ERROR "'${ARGN}' left ${output}")
+  endif()
+endfunction()
+# A file-size limit as a full disk would set it: 64 blocks of 512 or 1024 bytes.
+set(limited sh -c "ulimit -f 64 && exec \"$@\"" limited)
+
+# Item 4: /dev/full and a file-size limit, for filter, odom, sim and --stats.
+expect_refused(1 "^dispel filter: /dev/full: cannot write .*No space left on device" /dev/full
+               ${DISPEL} filter ${BAG} -o /dev/full --static-sensor)
+expect_refused(1 "^dispel filter: .*out.bag: cannot write the bag .*File too large" ${out}
+               ${limited} ${DISPEL} filter ${BAG} -o ${out} --static-sensor)
+expect_refused(1 "^dispel odom: /dev/full: cannot write .No space left on device" /dev/full
+               ${DISPEL} odom ${sim} -o /dev/full)
+expect_refused(1 "^dispel odom: .*traj_limited.csv: cannot write .File too large" ${WORK_DIR}/traj_limited.csv
+               ${limited} ${DISPEL} odom ${SOURCE_DIR}/data/robot_localization/test1.bag
+               -o ${WORK_DIR}/traj_limited.csv --wheel-topic /husky_velocity_controller/odom)
+expect_refused(1 "^dispel sim: /dev/full: cannot write .*No space left on device" /dev/full
+               ${DISPEL} sim ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o /dev/full
+               --duration 4)
+expect_refused(1 "^dispel sim: .*sim_limited.bag: cannot write the bag .*File too large"
+               ${WORK_DIR}/sim_limited.bag ${limited} ${DISPEL} sim
+               ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o ${WORK_DIR}/sim_limited.bag
+               --duration 30)
+expect_refused(1 "^dispel filter: statistics not written: /dev/full: cannot write .No space left"
+               /dev/full ${DISPEL} filter ${BAG} -o ${WORK_DIR}/stats_full.bag --static-sensor
+               --stats /dev/full)
+file(REMOVE ${WORK_DIR}/stats_full.bag)
+# The bag to /dev/null (a device: no file-size limit), the statistics under a 1-block limit.
+expect_refused(1 "^dispel filter: statistics not written: .*stats_limited.json: cannot write .File too large"
+               ${WORK_DIR}/stats_limited.json sh -c "ulimit -f 1 && exec \"$@\"" limited ${DISPEL}
+               filter ${BAG} -o /dev/null --static-sensor --stats ${WORK_DIR}/stats_limited.json)
+message(STATUS "write errors: one line, exit 1, nothing left behind")
+
+# Item 7: no output may be an input or another output; every output's directory exists; checked
+# before any work (the bag of the --stats nodir/ case is never written).
+expect_refused(1 "--stats '.*out.bag' and -o '.*out.bag' are the same file" ${out}
+               ${DISPEL} filter ${BAG} -o ${out} --stats ${out} --static-sensor)
+file(WRITE ${WORK_DIR}/in.log "# a CARMEN log that must survive\n")
+expect_refused(1 "-o '.*in.log' is the same file as the input '.*in.log'; the input would be"
+               /dev/null ${DISPEL} filter ${WORK_DIR}/in.log -o ${WORK_DIR}/../cli_test/in.log)
+file(READ ${WORK_DIR}/in.log kept)
+if(NOT kept STREQUAL "# a CARMEN log that must survive\n")
+  message(FATAL_ERROR "filter in.log -o in.log changed in.log")
+endif()
+file(WRITE ${WORK_DIR}/w.csv "t,v_left,v_right\n0,1,1\n1,1,1\n")
+expect_refused(1 "-o '.*w.csv' is the same file as the input --wheels-csv" /dev/null
+               ${DISPEL} odom --wheels-csv ${WORK_DIR}/w.csv -o ${WORK_DIR}/w.csv)
+expect_refused(1 "--truth-csv '.*t.csv' and -o '.*t.csv' are the same file" ${WORK_DIR}/t.csv
+               ${DISPEL} odom ${sim} -o ${WORK_DIR}/t.csv --truth-csv ${WORK_DIR}/./t.csv)
+expect_refused(1 "--stats '.*nodir/s.json': the directory '.*nodir' does not exist" ${out}
+               ${DISPEL} filter ${BAG} -o ${out} --stats ${WORK_DIR}/nodir/s.json --static-sensor)
+expect_refused(1 "--config '.*': not a regular file .a directory." ${out}
+               ${DISPEL} filter ${BAG} -o ${out} --config ${WORK_DIR} --static-sensor)
+execute_process(COMMAND mkfifo ${WORK_DIR}/fifo.yaml)
+expect_refused(1 "--config '.*fifo.yaml': not a regular file .a FIFO." ${out}
+               ${DISPEL} filter ${BAG} -o ${out} --config ${WORK_DIR}/fifo.yaml --static-sensor)
+expect_refused(1 "^dispel sim: '.*fifo.yaml': not a regular file .a FIFO." ${WORK_DIR}/x.bag
+               ${DISPEL} sim ${WORK_DIR}/fifo.yaml -o ${WORK_DIR}/x.bag)
+file(WRITE ${WORK_DIR}/empty.yaml "")
+expect_refused(1 "^dispel sim: .*empty.yaml: the scenario file is empty$" ${WORK_DIR}/x.bag
+               ${DISPEL} sim ${WORK_DIR}/empty.yaml -o ${WORK_DIR}/x.bag)
+file(WRITE ${WORK_DIR}/nan_wall.yaml "world: {walls: [[0, 0, .nan, 1]]}\n")
+expect_refused(1 "world.walls.0..2. must be a finite number, got '.nan'" ${WORK_DIR}/x.bag
+               ${DISPEL} sim ${WORK_DIR}/nan_wall.yaml -o ${WORK_DIR}/x.bag)
+# Command-line errors: the usage exit code 2, one line, a readable bound.
+expect_refused(2 "^dispel sim: --duration: must be a finite number > 0, got nan " ${WORK_DIR}/x.bag
+               ${DISPEL} sim ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o ${WORK_DIR}/x.bag
+               --duration nan)
+expect_refused(2 "^dispel sim: --duration: must be a finite number > 0, got -1 " ${WORK_DIR}/x.bag
+               ${DISPEL} sim ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o ${WORK_DIR}/x.bag
+               --duration -1)
+expect_refused(2 "^dispel render: --from: 'inf' is not a finite number" ${WORK_DIR}/x.png
+               ${DISPEL} render ${BAG} -o ${WORK_DIR}/x.png --from inf)
+expect_refused(2 "^dispel filter: .*--output is required" ${out} ${DISPEL} filter ${BAG})
+# An echoed input is cut (a 100 kB key would have been a 100 kB line).
+string(REPEAT "k" 100000 long_value)
+file(WRITE ${WORK_DIR}/long_key.yaml "segmentation:\n  cluster_gap_m: ${long_value}\n")
+expect_refused(1 "cluster_gap_m must be a number, got 'kkkk.*'... .100000 bytes.$" ${out}
+               ${DISPEL} filter ${BAG} -o ${out} --config ${WORK_DIR}/long_key.yaml --static-sensor)
+
+# Ctrl-C during dispel sim: interrupted with nothing written, or done with a complete bag.
+foreach(delay 0.3 1.0 2.0)
+  set(sim_out ${WORK_DIR}/sim_interrupted.bag)
+  file(REMOVE ${sim_out})
+  execute_process(COMMAND timeout --preserve-status -s INT ${delay} ${DISPEL} sim
+                          ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o ${sim_out} --duration 600
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE so ERROR_VARIABLE se)
+  if(EXISTS ${sim_out}.partial OR (rc EQUAL 130 AND EXISTS ${sim_out})
+     OR NOT (rc EQUAL 130 OR rc EQUAL 0))
+    message(FATAL_ERROR "dispel sim under SIGINT after ${delay} s: exit ${rc}, ${se}")
+  endif()
+endforeach()
+message(STATUS "issue 16 contract holds")
+
+# Issue 16 item 1: a CARMEN log whose time counts from 0 (as the classic corrected logs): filtered
+# with its stamps shifted by 1 s (said on stderr), and the output renders.
+set(carmen_out ${WORK_DIR}/carmen_from0.bag)
+file(REMOVE ${carmen_out})
+run_dispel(rc so se filter ${SOURCE_DIR}/data/carmen/leg_tracker_from0.log -o ${carmen_out}
+           --stats ${WORK_DIR}/carmen_stats.json)
+if(NOT rc EQUAL 0 OR NOT so MATCHES "100 scans" OR NOT se MATCHES "counts time from 0: every stamp is shifted by \\+1 s")
+  message(FATAL_ERROR "dispel filter on a CARMEN log from time 0 failed (${rc}): ${so}${se}")
+endif()
+file(READ ${WORK_DIR}/carmen_stats.json carmen_stats)
+string(JSON offset GET "${carmen_stats}" stamp_offset_s)
+if(NOT offset EQUAL 1)
+  message(FATAL_ERROR "stamp_offset_s ${offset}: ${carmen_stats}")
+endif()
+run_dispel(rc so se render ${carmen_out} -o ${WORK_DIR}/carmen.png --size 400x300)
+if(NOT rc EQUAL 0 OR NOT so MATCHES "100 scans" OR NOT EXISTS ${WORK_DIR}/carmen.png)
+  message(FATAL_ERROR "dispel render on a filtered CARMEN log failed (${rc}): ${so}${se}")
+endif()
+file(WRITE ${WORK_DIR}/wrapped.log "FLASER 3 1 1 1 0 0 0 0 0 0 5e9 host 0\n")
+expect_refused(1 "wrapped.log: line 1 .FLASER.: ipc_timestamp '5e9' is not a time a recording can hold"
+               ${out} ${DISPEL} filter ${WORK_DIR}/wrapped.log -o ${out})
+message(STATUS "CARMEN logs from time 0 filter and render")
+
+# Issue 16 item 2: a sparse log (scans 5 s apart) resets the filter at nearly every scan: a
+# warning on stderr and scans.mostly_unfiltered in the statistics.
+string(REPEAT "2 " 181 ranges)
+set(sparse_log "")
+foreach(k RANGE 1 20)
+  math(EXPR t "5 * ${k}")
+  string(APPEND sparse_log "FLASER 181 ${ranges}0 0 0 0 0 0 ${t} host ${t}\n")
+endforeach()
+file(WRITE ${WORK_DIR}/sparse.log "${sparse_log}")
+run_dispel(rc so se filter ${WORK_DIR}/sparse.log -o ${WORK_DIR}/sparse.bag
+           --stats ${WORK_DIR}/sparse.json)
+file(READ ${WORK_DIR}/sparse.json sparse_stats)
+string(JSON mostly GET "${sparse_stats}" scans mostly_unfiltered)
+string(JSON reset GET "${sparse_stats}" scans reset)
+if(NOT rc EQUAL 0 OR NOT se MATCHES "warning: 19 of 20 scans reset the filter .19 after a time gap"
+   OR NOT mostly STREQUAL "ON" OR NOT reset EQUAL 19)
+  message(FATAL_ERROR "sparse log: no warning or statistics (${rc}): ${se}\n${sparse_stats}")
+endif()
+message(STATUS "a sparse log is reported")

@@ -1,10 +1,13 @@
 // The dispel command line. Each subcommand is a thin adapter over the libraries.
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <exception>
 #include <iostream>
 
 #include "bench_command.hpp"
+#include "cli_validators.hpp"
 #ifdef DISPEL_HAVE_IO
+#include "cli_common.hpp"
 #include "filter_command.hpp"
 #include "odom_commands.hpp"
 #include "render_command.hpp"
@@ -78,7 +81,7 @@ int main(int argc, char** argv) {
   sim_cmd->add_option("--seed", sim.seed, "Random seed (same seed, same bag)")
       ->capture_default_str();
   sim_cmd->add_option("--duration", sim.duration_s, "Seconds to simulate (default: the scenario's)")
-      ->check(CLI::PositiveNumber);
+      ->check(dispel::apps::positive_number());
 
   dispel::apps::EvalOptions evaluation;
   CLI::App* eval_cmd =
@@ -157,7 +160,7 @@ int main(int argc, char** argv) {
       ->add_option("--align-first", eval_trajectory.align_first_m,
                    "Move the estimate rigidly onto the truth over its first METRES of path "
                    "(for a truth in another frame, e.g. GPS)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(dispel::apps::non_negative_number());
   eval_trajectory_cmd->add_flag("--json", eval_trajectory.json, "Print JSON");
 #endif
 
@@ -167,11 +170,42 @@ int main(int argc, char** argv) {
   dispel::apps::add_slam_commands(app, slam);
 #endif
 
+  const auto one_line = [](const std::string& what) {
+#ifdef DISPEL_HAVE_IO
+    return dispel::apps::error_line(what);
+#else
+    return what;
+#endif
+  };
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    // One line, the usage exit code (2) for every kind of bad command line.
+    std::string where = "dispel";
+    for (const CLI::App* sub : app.get_subcommands()) where += " " + sub->get_name();
+    std::string what = e.what();
+    while (!what.empty() && (what.back() == '\n' || what.back() == ' ')) what.pop_back();
+    std::cerr << where << ": " << one_line(what) << " (see " << where << " --help)\n";
+    return 2;
   }
+#ifdef DISPEL_HAVE_IO
+  // A file-size limit (ulimit -f) makes a write fail with EFBIG, reported as any write error,
+  // instead of killing the program with its output half-written.
+  std::signal(SIGXFSZ, SIG_IGN);
+  for (const CLI::App* sub : app.get_subcommands()) {
+    try {
+      dispel::apps::check_command_line(*sub);
+    } catch (const dispel::apps::UsageError& e) {
+      std::cerr << "dispel " << sub->get_name() << ": " << one_line(e.what()) << " (see dispel "
+                << sub->get_name() << " --help)\n";
+      return dispel::apps::kUsageExitCode;
+    } catch (const std::exception& e) {
+      std::cerr << "dispel " << sub->get_name() << ": " << one_line(e.what()) << "\n";
+      return 1;
+    }
+  }
+#endif
   try {
     if (*bench_cmd) return dispel::apps::run_bench(bench);
 #ifdef DISPEL_HAVE_IO
@@ -198,7 +232,7 @@ int main(int argc, char** argv) {
     if (dispel::apps::slam_command_chosen(slam)) return dispel::apps::exec_dispel_slam(argc, argv);
 #endif
   } catch (const std::exception& e) {
-    std::cerr << "dispel: " << e.what() << "\n";
+    std::cerr << "dispel: " << one_line(e.what()) << "\n";
     return 1;
   }
   std::cerr << "dispel: no command given\n" << app.help();

@@ -3,21 +3,16 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
-#include <csignal>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 
+#include "cli_common.hpp"
 #include "dispel/io/atomic_file.hpp"
 
 namespace dispel::apps {
 namespace {
-
-std::atomic<bool> g_interrupted{false};
-
-extern "C" void on_signal(int) { g_interrupted.store(true); }
 
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
@@ -39,10 +34,9 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
     skipped[reason] = n;
     skipped_total += n;
   }
-  j["scans"] = {{"total", s.scans},
-                {"processed", s.scans_filtered},
-                {"skipped", skipped_total},
-                {"skipped_by_reason", skipped}};
+  j["scans"] = {{"total", s.scans},         {"processed", s.scans_filtered},
+                {"skipped", skipped_total}, {"skipped_by_reason", skipped},
+                {"reset", s.scans_reset},   {"mostly_unfiltered", s.mostly_unfiltered}};
   nlohmann::ordered_json events;
   for (std::size_t e = 0; e < kFilterEventCount; ++e) {
     events[filter_event_name(static_cast<FilterEvent>(e))] = s.counters.events[e];
@@ -86,7 +80,10 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
   // The scanner's period --scale-to-scanner carried the counts over with (null when not needed).
   j["scan_period_s"] =
       s.scan_period_s ? nlohmann::ordered_json(*s.scan_period_s) : nlohmann::ordered_json(nullptr);
-  if (s.input_format == "carmen") j["malformed_lines"] = s.malformed_lines;
+  if (s.input_format == "carmen") {
+    j["malformed_lines"] = s.malformed_lines;
+    j["stamp_offset_s"] = s.stamp_offset_s;
+  }
   j["odometry_refused"] = s.odometry_refused;
   return j;
 }
@@ -119,30 +116,28 @@ int run_filter(FilterCommandOptions options) {
   } else if (options.compression == "lz4") {
     options.job.compression = jobs::Compression::kLz4;
   }
-  g_interrupted.store(false);
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  std::optional<Interrupts> interrupts(std::in_place);
   ProgressBar bar;
   jobs::Progress progress;
   if (::isatty(STDERR_FILENO) != 0) progress = [&bar](double f) { bar(f); };
 
   jobs::FilterJobStats stats;
   try {
-    stats = jobs::run_filter_job(options.job, progress, &g_interrupted, [](const std::string& n) {
-      std::cerr << "dispel filter: " << n << "\n";
-    });
+    stats = jobs::run_filter_job(
+        options.job, progress, interrupts->flag(),
+        [](const std::string& n) { std::cerr << "dispel filter: " << error_line(n) << "\n"; });
   } catch (const jobs::JobCancelled&) {
     bar.finish();
-    std::cerr << "dispel filter: interrupted; " << options.job.output << " was not written\n";
+    std::cerr << "dispel filter: interrupted; " << error_line(options.job.output)
+              << " was not written\n";
     return 130;
   } catch (const std::exception& e) {
     bar.finish();
-    std::cerr << "dispel filter: " << e.what() << "\n";
+    std::cerr << "dispel filter: " << error_line(e.what()) << "\n";
     return 1;
   }
   bar.finish();
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  interrupts.reset();
 
   std::int64_t skipped = 0;
   for (const auto& [reason, n] : stats.scans_skipped) skipped += n;
@@ -159,18 +154,15 @@ int run_filter(FilterCommandOptions options) {
   for (const auto& [reason, n] : stats.scans_skipped) {
     std::printf("  passed through: %lld scans, %s\n", static_cast<long long>(n), reason.c_str());
   }
+  std::fflush(stdout);
+  if (!stats.warning.empty()) std::cerr << "dispel filter: warning: " << stats.warning << "\n";
 
   if (!options.stats_path.empty()) {
     try {
-      io::AtomicFile file(options.stats_path);
-      {
-        std::ofstream out(file.temp_path());
-        out << stats_json(options.job, stats).dump(2) << "\n";
-        if (!out) throw std::runtime_error("cannot write " + file.temp_path());
-      }
-      file.commit();
+      io::write_file_atomically(options.stats_path, stats_json(options.job, stats).dump(2) + "\n");
     } catch (const std::exception& e) {
-      std::cerr << "dispel filter: statistics not written: " << e.what() << "\n";
+      std::cerr << "dispel filter: statistics not written: " << error_line(e.what()) << " ("
+                << options.job.output << " was written)\n";
       return 1;
     }
   }

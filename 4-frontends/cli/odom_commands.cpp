@@ -5,6 +5,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "cli_common.hpp"
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/csv.hpp"
 #include "dispel/jobs/filter_job.hpp"
@@ -16,7 +17,7 @@ int run_odom(const OdomCommandOptions& o) {
   try {
     s = jobs::run_odom_job(o.job);
   } catch (const std::exception& e) {
-    std::cerr << "dispel odom: " << e.what() << "\n";
+    std::cerr << "dispel odom: " << error_line(e.what()) << "\n";
     return 1;
   }
   const OdometryEstimate& e = s.final_estimate;
@@ -61,7 +62,7 @@ int run_eval_trajectory(const EvalTrajectoryOptions& o) {
     e = eval::compare_trajectories(io::read_trajectory_csv(o.truth),
                                    io::read_trajectory_csv(o.estimate), {o.align_first_m});
   } catch (const std::exception& err) {
-    std::cerr << "dispel eval-trajectory: " << err.what() << "\n";
+    std::cerr << "dispel eval-trajectory: " << error_line(err.what()) << "\n";
     return 1;
   }
   if (o.json) {

@@ -1,42 +1,33 @@
 #include "render_command.hpp"
 
-#include <atomic>
-#include <csignal>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <tuple>
 
+#include "cli_common.hpp"
 #include "dispel/jobs/filter_job.hpp"
 
 namespace dispel::apps {
-namespace {
-
-std::atomic<bool> g_interrupted{false};
-
-extern "C" void on_render_signal(int) { g_interrupted.store(true); }
-
-}  // namespace
-
 int run_render(RenderCommandOptions options) {
   render::RenderResult result;
+  std::optional<Interrupts> interrupts;
   try {
     if (!options.size.empty()) {
       std::tie(options.job.width_px, options.job.height_px) =
           render::parse_image_size(options.size);
     }
-    g_interrupted.store(false);
-    std::signal(SIGINT, on_render_signal);
-    std::signal(SIGTERM, on_render_signal);
-    result = render::render_bag(options.job, &g_interrupted);
+    interrupts.emplace();
+    result = render::render_bag(options.job, interrupts->flag());
   } catch (const jobs::JobCancelled&) {
-    std::cerr << "dispel render: interrupted; " << options.job.output << " was not written\n";
+    std::cerr << "dispel render: interrupted; " << error_line(options.job.output)
+              << " was not written\n";
     return 130;
   } catch (const std::exception& e) {
-    std::cerr << "dispel render: " << e.what() << "\n";
+    std::cerr << "dispel render: " << error_line(e.what()) << "\n";
     return 1;
   }
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  interrupts.reset();
   if (options.job.view == "scan") {
     std::printf("dispel render: scan %lld at %.2f s: %lld objects, %zu tracks\n",
                 static_cast<long long>(options.job.scan_index), result.from_s,

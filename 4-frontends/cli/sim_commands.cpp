@@ -5,6 +5,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
+#include "cli_common.hpp"
 #include "dispel/io/scenario_yaml.hpp"
 #include "dispel/jobs/eval_job.hpp"
 #include "dispel/jobs/sim_job.hpp"
@@ -21,10 +22,11 @@ nlohmann::ordered_json number_or_null(double v) {
 }  // namespace
 
 int run_sim(const SimOptions& o) {
+  const Interrupts interrupts;  // Ctrl-C: stop and remove OUT.bag.partial.
   try {
     const sim::Scenario scenario = io::load_scenario(o.scenario);
     const sim::SimulationOutput run = sim::simulate(scenario, o.seed, o.duration_s);
-    jobs::write_simulation(run, scenario, o.output);
+    jobs::write_simulation(run, scenario, o.output, interrupts.flag());
     std::int64_t counts[4] = {0, 0, 0, 0};
     for (const sim::ScanFrame& f : run.scans) {
       for (sim::Truth t : f.truth) ++counts[static_cast<int>(t)];
@@ -36,8 +38,11 @@ int run_sim(const SimOptions& o) {
         run.actor_count, static_cast<long long>(counts[0]), static_cast<long long>(counts[1]),
         static_cast<long long>(counts[2]), static_cast<long long>(counts[3]), o.output.c_str());
     return 0;
+  } catch (const jobs::JobCancelled&) {
+    std::cerr << "dispel sim: interrupted; " << error_line(o.output) << " was not written\n";
+    return 130;
   } catch (const std::exception& e) {
-    std::cerr << "dispel sim: " << e.what() << "\n";
+    std::cerr << "dispel sim: " << error_line(e.what()) << "\n";
     return 1;
   }
 }
@@ -47,7 +52,7 @@ int run_eval(const EvalOptions& o) {
   try {
     r = jobs::evaluate_bags(o.truth, o.result, o.scan_topic);
   } catch (const std::exception& e) {
-    std::cerr << "dispel eval: " << e.what() << "\n";
+    std::cerr << "dispel eval: " << error_line(e.what()) << "\n";
     return 1;
   }
   if (!o.plot.empty()) {
@@ -56,7 +61,7 @@ int run_eval(const EvalOptions& o) {
       render::plot_evaluation(r, "dispel eval: " + name(o.result) + " against " + name(o.truth),
                               o.plot);
     } catch (const std::exception& e) {
-      std::cerr << "dispel eval: " << e.what() << "\n";
+      std::cerr << "dispel eval: " << error_line(e.what()) << "\n";
       return 1;
     }
   }

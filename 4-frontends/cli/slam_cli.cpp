@@ -7,6 +7,8 @@
 #include <iostream>
 #include <string>
 
+#include "cli_validators.hpp"
+
 namespace dispel::apps {
 
 void add_slam_commands(CLI::App& app, SlamCli& cli) {
@@ -62,7 +64,7 @@ void add_slam_commands(CLI::App& app, SlamCli& cli) {
       ->capture_default_str();
   cli.experiment_duration = cli.experiment_cmd->add_option(
       "--duration", cli.experiment_duration_s, "Seconds per run (default: the scenario's)");
-  cli.experiment_duration->check(CLI::PositiveNumber);
+  cli.experiment_duration->check(positive_number());
   cli.experiment_cmd->add_option("--out", cli.experiment.out_dir,
                                  "Write runs.csv, summary.json and the trajectories here");
   cli.experiment_cmd->add_flag("--json", cli.experiment.json, "Print the summary as JSON");
@@ -73,12 +75,12 @@ void add_slam_commands(CLI::App& app, SlamCli& cli) {
   cli.experiment_cmd
       ->add_option("--diverged-at", cli.experiment.job.divergence_position_m,
                    "A run diverged when its position error ever exceeds this (m)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->capture_default_str();
   cli.experiment_cmd
       ->add_option("--diverged-at-yaw", cli.experiment_yaw_deg,
                    "... or its yaw error ever exceeds this (deg)")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->capture_default_str();
   cli.experiment_cmd->add_flag(
       "--localization", cli.experiment.job.localization,

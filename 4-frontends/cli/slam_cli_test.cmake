@@ -161,3 +161,15 @@ expect_error("dispel experiment --keep-bags" "needs --out" "${rc}" "${se}")
 run_dispel(rc so se experiment ${scenario} --seeds 1 --duration 5 --config ${WORK_DIR}/missing.yaml)
 expect_error("dispel experiment --config missing" "missing.yaml" "${rc}" "${se}")
 message(STATUS "dispel slam and dispel experiment hold their contract")
+
+# Issue 16: a filtered CARMEN log (time from 0, shifted by 1 s) carries the odometry and the
+# laser's mount dispel slam needs.
+run_dispel(rc so se filter ${SOURCE_DIR}/data/carmen/leg_tracker_from0.log
+           -o ${WORK_DIR}/carmen.bag)
+expect_ok("dispel filter (CARMEN)" "${rc}" "${se}")
+run_dispel(rc so se slam ${WORK_DIR}/carmen.bag -o ${WORK_DIR}/carmen_slam.csv --json)
+expect_ok("dispel slam (CARMEN)" "${rc}" "${se}")
+string(JSON used GET "${so}" scans_used)
+if(NOT used EQUAL 100)
+  message(FATAL_ERROR "dispel slam on the filtered CARMEN log used ${used} scans: ${so}")
+endif()

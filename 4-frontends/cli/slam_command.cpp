@@ -12,6 +12,7 @@
 
 #include "dispel/io/atomic_file.hpp"
 #include "dispel/io/csv.hpp"
+#include "dispel/io/text.hpp"
 #include "dispel/jobs/filter_job.hpp"
 #include "dispel/jobs/odom_job.hpp"
 #include "dispel/slam/grid_map.hpp"
@@ -33,7 +34,7 @@ bool run_and_write(const SlamCommandOptions& o, Result& r, const Run& run,
     io::write_trajectory_csv(o.output, r.trajectory);
     return true;
   } catch (const std::exception& e) {
-    std::cerr << "dispel slam: " << e.what() << "\n";
+    std::cerr << "dispel slam: " << io::one_line(e.what()) << "\n";
     return false;
   }
 }
@@ -361,7 +362,7 @@ int run_experiment(const ExperimentCommandOptions& options) {
       }
     }
   } catch (const std::exception& e) {
-    std::cerr << "dispel experiment: " << e.what() << "\n";
+    std::cerr << "dispel experiment: " << io::one_line(e.what()) << "\n";
     status = 1;
   }
   if (!temp_dir.empty()) {

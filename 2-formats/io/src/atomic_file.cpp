@@ -41,4 +41,19 @@ void AtomicFile::commit() {
   committed_ = true;
 }
 
+void write_file_atomically(const std::string& path, const std::string& text) {
+  AtomicFile file(path);
+  errno = 0;
+  std::FILE* f = std::fopen(file.temp_path().c_str(), "w");
+  if (f == nullptr) throw OutputError(path + ": cannot write (" + std::strerror(errno) + ")");
+  const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  const bool flushed = written && std::fflush(f) == 0;
+  const int error = errno;
+  const bool closed = std::fclose(f) == 0;
+  if (!written || !flushed || !closed) {
+    throw OutputError(path + ": cannot write (" + std::strerror(error != 0 ? error : errno) + ")");
+  }
+  file.commit();
+}
+
 }  // namespace dispel::io

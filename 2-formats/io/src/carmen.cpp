@@ -7,11 +7,20 @@
 
 #include "dispel/core/pose2.hpp"
 #include "dispel/io/errors.hpp"
+#include "dispel/io/text.hpp"
 
 namespace dispel::io {
 namespace {
 
 constexpr double kPiValue = 3.14159265358979323846;
+
+// A stamp that cannot be represented: the whole log is refused, never wrapped or clamped.
+class StampError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+constexpr double kMaxStamp_s = 4294967295.0;
 
 struct Fields {
   std::vector<std::string> words;
@@ -28,19 +37,28 @@ struct Fields {
       used = 0;
     }
     if (used != w.size() || used == 0) {
-      throw std::runtime_error(std::string(what) + " is not a number: '" + w + "'");
+      throw std::runtime_error(std::string(what) + " is not a number: " + quote(w));
     }
     return v;
   }
   std::int64_t count(const char* what, std::size_t max) {
     const double v = number(what);
     if (v < 0 || v != std::floor(v) || v > static_cast<double>(max)) {
-      throw std::runtime_error(std::string(what) + " is not a valid count: '" + words[next - 1] +
-                               "'");
+      throw std::runtime_error(std::string(what) +
+                               " is not a valid count: " + quote(words[next - 1]));
     }
     return static_cast<std::int64_t>(v);
   }
   void skip(std::size_t n) { next += n; }
+  // A time stamp: finite, not negative, below 2^32 - 1 s (what a ROS time holds).
+  double stamp(const char* what) {
+    const double v = number(what);
+    if (!(v >= 0.0 && v < kMaxStamp_s)) {
+      throw StampError(std::string(what) + " " + quote(words[next - 1]) +
+                       " is not a time a recording can hold (0 to 4294967295 s)");
+    }
+    return v;
+  }
 };
 
 void read_ranges(Fields& f, std::int64_t n, LaserScan& scan) {
@@ -63,7 +81,7 @@ CarmenScan parse_old_laser(Fields& f, bool rear, float max_range) {
   const double y = f.number("y");
   const double theta = f.number("theta");
   f.skip(3);  // Odometry pose of the robot.
-  s.stamp_s = f.number("ipc_timestamp");
+  s.stamp_s = f.stamp("ipc_timestamp");
   out.laser_pose = {x, y, wrap_angle(theta + (rear ? kPiValue : 0.0))};
   return out;
 }
@@ -90,7 +108,7 @@ CarmenScan parse_robot_laser(Fields& f) {
   const double y = f.number("laser_y");
   const double theta = f.number("laser_theta");
   f.skip(8);  // robot pose, tv, rv, safety distances, turn axis
-  s.stamp_s = f.number("ipc_timestamp");
+  s.stamp_s = f.stamp("ipc_timestamp");
   out.laser_pose = {x, y, wrap_angle(theta)};
   return out;
 }
@@ -120,10 +138,13 @@ CarmenLog parse_carmen_log(std::istream& in, const std::string& origin, float ol
         const double y = f.number("y");
         const double theta = f.number("theta");
         f.skip(3);
-        log.odometry.push_back({f.number("ipc_timestamp"), {x, y, wrap_angle(theta)}});
+        log.odometry.push_back({f.stamp("ipc_timestamp"), {x, y, wrap_angle(theta)}});
       } else {
         ++log.ignored_lines;
       }
+    } catch (const StampError& e) {
+      throw InputError(origin + ": line " + std::to_string(log.lines) + " (" + type +
+                       "): " + e.what());
     } catch (const std::exception& e) {
       ++log.malformed_lines;
       if (log.first_malformed.empty()) {

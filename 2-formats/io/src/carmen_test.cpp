@@ -5,6 +5,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "dispel/io/errors.hpp"
+
 namespace dispel::io {
 namespace {
 
@@ -70,6 +72,27 @@ TEST(CarmenLog, AFileWithoutLaserLinesIsAnErrorNamingIt) {
     EXPECT_NE(std::string(e.what()).find("empty.log: no FLASER"), std::string::npos) << e.what();
   }
   EXPECT_THROW(read_carmen_log("/nonexistent.clf"), std::runtime_error);
+}
+
+// Issue 16: 5e9 s was written wrapped (705032704.5 s), 1e300 s became 0. A stamp a recording
+// cannot hold refuses the log, naming the line; time 0 itself is a valid CARMEN stamp.
+TEST(CarmenLog, AStampARecordingCannotHoldIsAnErrorNamingTheLine) {
+  const std::string flaser = "FLASER 3 1 1 1 0 0 0 0 0 0 ";
+  for (const std::string stamp : {"5e9", "4294967295", "-1", "1e300", "nan", "inf"}) {
+    std::stringstream log(flaser + "0 host 0\n" + flaser + stamp + " host 0\n");
+    try {
+      parse_carmen_log(log, "t.log");
+      ADD_FAILURE() << stamp;
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()), "t.log: line 2 (FLASER): ipc_timestamp '" + stamp +
+                                           "' is not a time a recording can hold (0 to "
+                                           "4294967295 s)");
+    }
+  }
+  std::stringstream odom("ODOM 0 0 0 0 0 0 -5 host 0\n" + flaser + "0 host 0\n");
+  EXPECT_THROW(parse_carmen_log(odom, "t.log"), InputError);
+  std::stringstream from_zero(flaser + "0 host 0\n" + flaser + "4294967294.5 host 0\n");
+  EXPECT_EQ(parse_carmen_log(from_zero, "t.log").scans.size(), 2u);
 }
 
 }  // namespace

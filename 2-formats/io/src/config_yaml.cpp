@@ -9,6 +9,8 @@
 #include <set>
 #include <sstream>
 
+#include "dispel/io/text.hpp"
+
 namespace dispel::io {
 namespace {
 
@@ -25,7 +27,7 @@ T scalar(const YAML::Node& node, const std::string& key, const std::string& orig
   try {
     return node.as<T>();
   } catch (const YAML::Exception&) {
-    fail(origin, key + " must be " + kind + ", got '" + node.Scalar() + "'");
+    fail(origin, key + " must be " + kind + ", got " + quote(node.Scalar()));
   }
 }
 
@@ -56,7 +58,7 @@ class Binder {
       if (it == names.end()) {
         std::string options;
         for (const auto& [name, value] : names) options += (options.empty() ? "" : ", ") + name;
-        fail(origin_, k + " must be one of " + options + ", got '" + word + "'");
+        fail(origin_, k + " must be one of " + options + ", got " + quote(word));
       }
       field = it->second;
     };
@@ -71,14 +73,14 @@ class Binder {
       const auto name = item.first.as<std::string>();
       const std::string key = prefix.empty() ? name : prefix + "." + name;
       // YAML would let the last of two equal keys win without a word.
-      if (!seen.insert(name).second) fail(origin_, "key '" + key + "' is given twice");
+      if (!seen.insert(name).second) fail(origin_, "key " + quote(key) + " is given twice");
       const auto it = setters_.find(key);
       if (it == setters_.end()) {
         if (sections_.count(key) != 0) {
           sections_.at(key)(item.second, key);
           continue;
         }
-        fail(origin_, "unknown key '" + key + "'");
+        fail(origin_, "unknown key " + quote(key));
       }
       if (item.second.IsNull()) fail(origin_, key + " has no value");
       it->second(item.second, key);
@@ -232,7 +234,7 @@ DynamicFilterConfig parse_filter_config(const std::string& yaml_text, const std:
       if (preset == "thesis") {
         c = thesis_config();
       } else if (preset != "default") {
-        fail(origin, "preset must be one of default, thesis, got '" + preset + "'");
+        fail(origin, "preset must be one of default, thesis, got " + quote(preset));
       }
     }
     Binder b(origin);
@@ -257,11 +259,7 @@ std::set<std::string> filter_config_top_level_keys() {
 namespace {
 
 std::string read_text(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot open the configuration file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
+  return read_regular_file(path, "configuration file");
 }
 
 }  // namespace
@@ -326,7 +324,7 @@ OdometrySettings parse_odometry_settings(const std::string& yaml_text, const std
                                                              {"z", {2, 1.0}}, {"-z", {2, -1.0}}};
     const auto it = axes.find(axis);
     if (it == axes.end())
-      fail(origin, k + " must be one of x, -x, y, -y, z, -z, got '" + axis + "'");
+      fail(origin, k + " must be one of x, -x, y, -y, z, -z, got " + quote(axis));
     settings.imu_yaw_axis = it->second.first;
     settings.imu_yaw_sign = it->second.second;
   });

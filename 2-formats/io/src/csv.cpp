@@ -1,13 +1,16 @@
 #include "dispel/io/csv.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdarg>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
 #include "dispel/io/atomic_file.hpp"
 #include "dispel/io/errors.hpp"
+#include "dispel/io/text.hpp"
 
 namespace dispel::io {
 namespace {
@@ -46,7 +49,7 @@ CsvColumns read_csv(const std::string& path, const std::vector<std::string>& wan
     const auto it = std::find(header.begin(), header.end(), w);
     if (it == header.end()) {
       throw InputError(path + ": the header must name the columns " + expected + " (line " +
-                       std::to_string(number) + ": '" + line + "')");
+                       std::to_string(number) + ": " + quote(line) + ")");
     }
     index.push_back(static_cast<std::size_t>(it - header.begin()));
   }
@@ -70,8 +73,8 @@ CsvColumns read_csv(const std::string& path, const std::vector<std::string>& wan
         used = 0;
       }
       if (c.empty() || used != c.size()) {
-        throw InputError(path + ":" + std::to_string(number) + ": " + header[i] + " '" + c +
-                         "' is not a number");
+        throw InputError(path + ":" + std::to_string(number) + ": " + header[i] + " " + quote(c) +
+                         " is not a number");
       }
       row.push_back(v);
     }
@@ -89,12 +92,16 @@ std::vector<eval::TrajectoryPoint> read_trajectory_csv(const std::string& path) 
   return out;
 }
 
-void write_trajectory_csv(const std::string& path,
-                          const std::vector<eval::TrajectoryPoint>& trajectory) {
-  CsvWriter out(path);
+void write_trajectory(CsvWriter& out, const std::vector<eval::TrajectoryPoint>& trajectory) {
   out.line("t,x,y,yaw");
   for (const auto& p : trajectory)
     out.printf("%.9f,%.9g,%.9g,%.9g\n", p.t_s, p.x_m, p.y_m, p.yaw_rad);
+}
+
+void write_trajectory_csv(const std::string& path,
+                          const std::vector<eval::TrajectoryPoint>& trajectory) {
+  CsvWriter out(path);
+  write_trajectory(out, trajectory);
   out.commit();
 }
 
@@ -103,11 +110,17 @@ struct CsvWriter::Impl {
   std::string path;
   AtomicFile file;
   std::FILE* f = nullptr;
+  int first_error = 0;  ///< errno of the first write that failed (ENOSPC, EFBIG), 0 if none.
+  void check(int result) {
+    if (result < 0 && first_error == 0) first_error = errno != 0 ? errno : EIO;
+  }
 };
 
 CsvWriter::CsvWriter(const std::string& path) : impl_(std::make_unique<Impl>(path)) {
   impl_->f = std::fopen(impl_->file.temp_path().c_str(), "w");
-  if (impl_->f == nullptr) throw OutputError(path + ": cannot write the file");
+  if (impl_->f == nullptr) {
+    throw OutputError(path + ": cannot write the file (" + std::strerror(errno) + ")");
+  }
 }
 
 CsvWriter::~CsvWriter() {
@@ -115,22 +128,33 @@ CsvWriter::~CsvWriter() {
 }
 
 void CsvWriter::line(const std::string& text) {
-  std::fputs(text.c_str(), impl_->f);
-  std::fputc('\n', impl_->f);
+  impl_->check(std::fputs(text.c_str(), impl_->f));
+  impl_->check(std::fputc('\n', impl_->f));
 }
 
 void CsvWriter::printf(const char* format, ...) {
   va_list args;
   va_start(args, format);
-  std::vfprintf(impl_->f, format, args);
+  impl_->check(std::vfprintf(impl_->f, format, args));
   va_end(args);
 }
 
-void CsvWriter::commit() {
+void CsvWriter::close() {
+  if (impl_->f == nullptr) return;
+  errno = 0;
   const bool ok = std::fflush(impl_->f) == 0 && std::ferror(impl_->f) == 0;
+  const int error = errno;
   const bool closed = std::fclose(impl_->f) == 0;
   impl_->f = nullptr;
-  if (!ok || !closed) throw OutputError(impl_->path + ": writing failed");
+  if (!ok || !closed || impl_->first_error != 0) {
+    const int reason = impl_->first_error != 0 ? impl_->first_error : error != 0 ? error : errno;
+    throw OutputError(impl_->path + ": cannot write (" +
+                      (reason != 0 ? std::strerror(reason) : "writing failed") + ")");
+  }
+}
+
+void CsvWriter::commit() {
+  close();
   try {
     impl_->file.commit();
   } catch (const std::exception& e) {

@@ -21,6 +21,12 @@ DecodedMessage::DecodedMessage(std::string topic, Stamp time, DecodedPayload pay
 }
 
 Stamp Stamp::from_seconds(double seconds) {
+  // Beyond what 64-bit seconds hold (or not a number): the farthest stamp on that side, never
+  // an undefined conversion (writers refuse such a stamp, they do not wrap it).
+  constexpr double kLimit = 9.2e18;
+  if (std::isnan(seconds)) return {std::numeric_limits<std::int64_t>::min(), 0};
+  if (seconds >= kLimit) return {std::numeric_limits<std::int64_t>::max(), 0};
+  if (seconds <= -kLimit) return {std::numeric_limits<std::int64_t>::min(), 0};
   const double whole = std::floor(seconds);
   auto nsec = static_cast<std::int64_t>(std::llround((seconds - whole) * 1e9));
   auto sec = static_cast<std::int64_t>(whole);

@@ -2,9 +2,10 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <fstream>
+#include <cmath>
 #include <set>
-#include <sstream>
+
+#include "dispel/io/text.hpp"
 
 namespace dispel::io {
 namespace {
@@ -19,29 +20,32 @@ class Reader {
 
   void keys(const YAML::Node& n, const std::string& path,
             const std::set<std::string>& allowed) const {
-    if (!n.IsMap()) fail(path + " must be a mapping");
+    if (!n.IsMap()) fail((path.empty() ? std::string("the file") : path) + " must be a mapping");
     std::set<std::string> seen;
     for (const auto& item : n) {
       const auto k = item.first.as<std::string>();
       const std::string key = path.empty() ? k : path + "." + k;
-      if (allowed.count(k) == 0) fail("unknown key '" + key + "'");
-      if (!seen.insert(k).second) fail("key '" + key + "' is given twice");
+      if (allowed.count(k) == 0) fail("unknown key " + quote(key));
+      if (!seen.insert(k).second) fail("key " + quote(key) + " is given twice");
     }
   }
   double number(const YAML::Node& n, const std::string& path) const {
     if (!n.IsScalar()) fail(path + " must be a number");
+    double v = 0.0;
     try {
-      return n.as<double>();
+      v = n.as<double>();
     } catch (const YAML::Exception&) {
-      fail(path + " must be a number, got '" + n.Scalar() + "'");
+      fail(path + " must be a number, got " + quote(n.Scalar()));
     }
+    if (!std::isfinite(v)) fail(path + " must be a finite number, got " + quote(n.Scalar()));
+    return v;
   }
   int integer(const YAML::Node& n, const std::string& path) const {
     if (!n.IsScalar()) fail(path + " must be an integer");
     try {
       return n.as<int>();
     } catch (const YAML::Exception&) {
-      fail(path + " must be an integer, got '" + n.Scalar() + "'");
+      fail(path + " must be an integer, got " + quote(n.Scalar()));
     }
   }
   bool boolean(const YAML::Node& n, const std::string& path) const {
@@ -231,7 +235,7 @@ void read_actors(const Reader& r, const YAML::Node& n, std::vector<sim::Actor>& 
     if (type == "cart" || type == "forklift") {
       a.kind = sim::ActorKind::kCart;
     } else if (type != "person") {
-      r.fail(path + ".type must be person, cart or forklift, got '" + type + "'");
+      r.fail(path + ".type must be person, cart or forklift, got " + quote(type));
     }
     if (e["standing"]) {
       a.waypoints = {r.point(e["standing"], path + ".standing")};
@@ -281,6 +285,7 @@ sim::Scenario parse_scenario(const std::string& yaml_text, const std::string& or
   } catch (const YAML::Exception& e) {
     r.fail(std::string("not valid YAML: ") + e.what());
   }
+  if (root.IsNull()) r.fail("the scenario file is empty");
   sim::Scenario s;
   try {
     r.keys(root, "",
@@ -303,11 +308,7 @@ sim::Scenario parse_scenario(const std::string& yaml_text, const std::string& or
 }
 
 sim::Scenario load_scenario(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(path + ": cannot open the scenario file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_scenario(text.str(), path);
+  return parse_scenario(read_regular_file(path, "scenario file"), path);
 }
 
 }  // namespace dispel::io

@@ -3,8 +3,14 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <limits>
 #include <map>
+#include <mutex>
 #include <optional>
+#include <vector>
 
 #include "dispel/io/atomic_file.hpp"
 #include "dispel/io/errors.hpp"
@@ -151,54 +157,110 @@ void Ros1BagReader::read(const std::vector<std::string>& topics,
   }
 }
 
+namespace {
+
+// A bag the library could not close (a full disk, a file-size limit, /dev/full): its close()
+// throws on every call, and rosbag::Bag's destructor calls close() again, throws from a
+// destructor and aborts the program. Such a bag is never destroyed: it is kept here (reachable,
+// so leak checkers stay quiet) and its file is deleted by AtomicFile. Its memory and file
+// descriptor are held until the process ends; a program writes few bags.
+void abandon(std::unique_ptr<rosbag::Bag> bag) {
+  static std::mutex mutex;
+  static auto* const kept = new std::vector<std::unique_ptr<rosbag::Bag>>();
+  const std::lock_guard<std::mutex> lock(mutex);
+  kept->push_back(std::move(bag));
+}
+
+// What the bag library's error leaves out: why the system refused the write.
+std::string with_reason(const std::string& what, int error) {
+  if (error == ENOSPC || error == EFBIG || error == EIO || error == EDQUOT || error == EACCES ||
+      error == ENOENT || error == EROFS || error == EISDIR || error == ENOTDIR) {
+    return what + ": " + std::strerror(error);
+  }
+  return what;
+}
+
+// A bag holds receive times from 1 ns (ros::TIME_MIN) to 2^32 - 1 s; a time outside is refused,
+// never wrapped or clamped onto another time.
+ros::Time bag_time(const std::string& path, const std::string& topic, const Stamp& t) {
+  constexpr std::int64_t kMax = std::numeric_limits<std::uint32_t>::max();
+  if (t.sec < 0 || t.sec > kMax || t.is_zero()) {
+    char seconds[32];
+    std::snprintf(seconds, sizeof seconds, "%.10g", t.seconds());
+    throw OutputError(path + ": cannot write " + topic.substr(0, 80) + " at " + seconds +
+                      " s: a ROS 1 bag holds times from 1 ns to 4294967295 s");
+  }
+  return ros::Time(static_cast<std::uint32_t>(t.sec), t.nsec);
+}
+
+}  // namespace
+
 struct Ros1BagWriter::Impl {
-  explicit Impl(const std::string& p) : path(p), file(p) {}
+  explicit Impl(const std::string& p) : path(p), file(p), bag(std::make_unique<rosbag::Bag>()) {}
+  ~Impl() {
+    if (open) {
+      try {
+        bag->close();  // Flushes; the file is then removed by AtomicFile.
+      } catch (...) {  // A destructor must not throw (it may run while an error unwinds).
+        abandon(std::move(bag));
+      }
+    } else if (failed) {
+      abandon(std::move(bag));
+    }
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
   std::string path;
   AtomicFile file;
-  rosbag::Bag bag;
+  std::unique_ptr<rosbag::Bag> bag;
   bool open = false;
+  bool failed = false;  ///< A write failed: the bag cannot be closed cleanly any more.
 
   template <typename Fn>
   void writing(Fn&& fn) {
+    if (failed) throw OutputError(path + ": cannot write the bag (an earlier write failed)");
+    errno = 0;
     try {
       fn();
     } catch (const std::exception& e) {
-      throw OutputError(path + ": cannot write the bag (" + e.what() + ")");
+      const int error = errno;
+      failed = true;
+      open = false;
+      throw OutputError(path + ": cannot write the bag (" + with_reason(e.what(), error) + ")");
     }
   }
   template <typename RosMessage>
   void write(const std::string& topic, Stamp time, const RosMessage& msg) {
-    writing([&] { bag.write(topic, to_ros_time(time), msg); });
+    const ros::Time t = bag_time(path, topic, time);  // Before the write: the bag stays good.
+    writing([&] { bag->write(topic, t, msg); });
   }
 };
 
 Ros1BagWriter::Ros1BagWriter(const std::string& path, BagCompression compression)
     : impl_(std::make_unique<Impl>(path)) {
+  errno = 0;
   try {
-    impl_->bag.open(impl_->file.temp_path(), rosbag::bagmode::Write);
+    impl_->bag->open(impl_->file.temp_path(), rosbag::bagmode::Write);
   } catch (const std::exception& e) {
-    throw OutputError(path + ": cannot write (" + e.what() + ")");
+    const int error = errno;
+    impl_->failed = true;
+    throw OutputError(path + ": cannot write (" + with_reason(e.what(), error) + ")");
   }
   impl_->open = true;
   switch (compression) {
     case BagCompression::kBz2:
-      impl_->bag.setCompression(rosbag::compression::BZ2);
+      impl_->bag->setCompression(rosbag::compression::BZ2);
       break;
     case BagCompression::kLz4:
-      impl_->bag.setCompression(rosbag::compression::LZ4);
+      impl_->bag->setCompression(rosbag::compression::LZ4);
       break;
     case BagCompression::kNone:
       break;
   }
 }
 
-Ros1BagWriter::~Ros1BagWriter() {
-  if (!impl_->open) return;
-  try {
-    impl_->bag.close();  // Flushes; the file is then removed by AtomicFile.
-  } catch (...) {        // A destructor must not throw (it may run while an error unwinds).
-  }
-}
+Ros1BagWriter::~Ros1BagWriter() = default;
 
 void Ros1BagWriter::copy(const RecordedMessage& message) {
   const auto* m = dynamic_cast<const Ros1Message*>(&message);
@@ -214,7 +276,7 @@ void Ros1BagWriter::copy(const RecordedMessage& message) {
     return;  // write() counted it.
   }
   const rosbag::MessageInstance& i = m->instance();
-  impl_->writing([&] { impl_->bag.write(i.getTopic(), i.getTime(), i, i.getConnectionHeader()); });
+  impl_->writing([&] { impl_->bag->write(i.getTopic(), i.getTime(), i, i.getConnectionHeader()); });
   ++written_;
 }
 
@@ -244,7 +306,8 @@ void Ros1BagWriter::write(const std::string& topic, Stamp time, const ImuMessage
 }
 
 void Ros1BagWriter::finish() {
-  impl_->writing([&] { impl_->bag.close(); });
+  errno = 0;
+  impl_->writing([&] { impl_->bag->close(); });
   impl_->open = false;
   try {
     impl_->file.commit();

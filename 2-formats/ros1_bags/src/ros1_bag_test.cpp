@@ -9,9 +9,16 @@
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/JointState.h>
 #include <sensor_msgs/LaserScan.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <tf2_msgs/TFMessage.h>
+#include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "dispel/io/errors.hpp"
@@ -214,6 +221,87 @@ TEST(Ros1BagWriter, RefusesAnotherFormatsMessageItCannotDecodeNamingTheTopic) {
                      .c_str());
   }
   EXPECT_EQ(writer.messages_written(), 0);
+}
+
+// Writes @p scans scans of sample() to @p path and finishes; the error's message, or "" when
+// the bag was written.
+std::string write_scans(const std::string& path, int scans, BagCompression compression) {
+  try {
+    Ros1BagWriter writer(path, compression);
+    for (int k = 0; k < scans; ++k) {
+      writer.write("/scan", Stamp{10 + k, 0}, to_message(sample(k).scan));
+    }
+    writer.finish();
+  } catch (const OutputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool exists(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+// Issue 16: a write error (a full disk) used to abort the program: rosbag::Bag's destructor
+// closed the bag again and threw while the first error unwound.
+TEST(Ros1BagWriter, AFullDiskIsAnErrorNamingTheFileNotAnAbort) {
+  for (const BagCompression c :
+       {BagCompression::kNone, BagCompression::kBz2, BagCompression::kLz4}) {
+    const std::string m = write_scans("/dev/full", 200, c);
+    EXPECT_NE(m.find("/dev/full: cannot write"), std::string::npos) << m;
+    EXPECT_NE(m.find("No space left on device"), std::string::npos) << m;
+  }
+}
+
+// The same under a file-size limit (ulimit -f), in a child process: the write fails with EFBIG
+// (SIGXFSZ ignored, as dispel does), the error names the file, and no partial file is left.
+TEST(Ros1BagWriter, AFileSizeLimitIsAnErrorAndLeavesNoPartialFile) {
+  const std::string path = ::testing::TempDir() + "/size_limited.bag";
+  std::remove(path.c_str());
+  std::remove((path + ".partial").c_str());
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{200000, 200000};
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+    const std::string m = write_scans(path, 400, BagCompression::kNone);
+    const bool named = m.find(path + ": cannot write the bag") != std::string::npos &&
+                       m.find("File too large") != std::string::npos;
+    std::_Exit(m.empty() ? 2 : named ? 0 : 3);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status)) << "the child ended by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "2: written despite the limit; 3: another message";
+  EXPECT_FALSE(exists(path));
+  EXPECT_FALSE(exists(path + ".partial"));
+}
+
+// Issue 16: time 0 failed deep in the bag library, 5e9 s was written wrapped (705032704.5 s),
+// 1e300 s became 0. Each is refused before it reaches the bag, and the bag stays writable.
+TEST(Ros1BagWriter, RefusesTimesABagCannotHold) {
+  const std::string path = ::testing::TempDir() + "/times.bag";
+  Ros1BagWriter writer(path, BagCompression::kNone);
+  const ScanMessage scan = to_message(sample(0).scan);
+  for (const double t : {0.0, -1.0, 5e9, 1e300, std::nan("")}) {
+    try {
+      writer.write("/scan", Stamp::from_seconds(t), scan);
+      ADD_FAILURE() << "wrote a scan at " << t << " s";
+    } catch (const OutputError& e) {
+      EXPECT_NE(std::string(e.what()).find("cannot write /scan at"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("a ROS 1 bag holds times from 1 ns to 4294967295 s"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  writer.write("/scan", Stamp{4294967295, 0}, scan);
+  writer.write("/scan", Stamp{0, 1}, scan);
+  writer.finish();
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  EXPECT_EQ(rosbag::View(bag).size(), 2u);
+  std::remove(path.c_str());
 }
 
 }  // namespace

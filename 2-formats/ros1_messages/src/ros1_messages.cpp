@@ -29,10 +29,7 @@ geometry_msgs::Pose pose_to_ros(const Pose2& p) {
 
 double to_seconds(const ros::Time& t) { return t.toSec(); }
 
-ros::Time to_ros_time(double seconds) {
-  const Stamp s = Stamp::from_seconds(seconds);
-  return ros::Time(static_cast<std::uint32_t>(s.sec), s.nsec);
-}
+ros::Time to_ros_time(double seconds) { return to_ros_time(Stamp::from_seconds(seconds)); }
 
 Stamp to_stamp(const ros::Time& t) { return {static_cast<std::int64_t>(t.sec), t.nsec}; }
 

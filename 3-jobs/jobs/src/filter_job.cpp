@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "dispel/io/carmen.hpp"
@@ -75,8 +76,39 @@ class ScanFilter {
     stats_.counters = runner_.filter_counters();
     stats_.config = runner_.config();
     stats_.scan_period_s = runner_.scan_period_s();
+    warn_when_mostly_unfiltered();
   }
 
+ private:
+  // A log whose scans mostly reset the filter or pass through is filtered into (almost) nothing;
+  // the summary alone ("0 dynamic removed") would not say so.
+  void warn_when_mostly_unfiltered() {
+    const auto event = [&](FilterEvent e) {
+      return stats_.counters.events[static_cast<std::size_t>(e)];
+    };
+    const std::int64_t gap = event(FilterEvent::kResetTimeGap);
+    const std::int64_t back = event(FilterEvent::kResetTimeBackwards);
+    const std::int64_t jump = event(FilterEvent::kResetPoseJump);
+    stats_.scans_reset = gap + back + jump;
+    std::int64_t passed = 0;
+    for (const auto& [reason, n] : stats_.scans_skipped) passed += n;
+    const std::int64_t unfiltered = stats_.scans_reset + passed;
+    stats_.mostly_unfiltered = stats_.scans > 0 && 2 * unfiltered > stats_.scans;
+    if (!stats_.mostly_unfiltered) return;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "%lld of %lld scans reset the filter (%lld after a time gap above "
+                  "max_time_gap_s %.3g s, %lld with time going back, %lld after a pose jump) "
+                  "and %lld were passed through unchanged: moving objects are hardly removed "
+                  "(a sparse or subsampled log?)",
+                  static_cast<long long>(stats_.scans_reset), static_cast<long long>(stats_.scans),
+                  static_cast<long long>(gap), stats_.config.max_time_gap_s,
+                  static_cast<long long>(back), static_cast<long long>(jump),
+                  static_cast<long long>(passed));
+    stats_.warning = text;
+  }
+
+ public:
  private:
   pipeline::ScanFilterRunner runner_;
   FilterJobStats& stats_;
@@ -175,15 +207,36 @@ FilterJobStats run_recording(const FilterJobOptions& o, const Progress& progress
 }
 
 // ------------------------------------------------------------------------------------------
-// CARMEN logs: the laser's pose comes with each laser line; odometry lines become /odom.
+// CARMEN logs: the laser's pose comes with each laser line. The output carries what `dispel
+// render` and `dispel slam` need: /odom (odom -> base_link) at every scan with the pose the
+// filter used, the mounts on /tf_static (base_link -> laser: identity; base_link -> rear_laser:
+// half a turn), and the log's ODOM lines as they are on /carmen_odom.
+
+// A bag holds no time 0: a log that counts time from 0 (the GMapping-corrected classic logs) is
+// shifted by kCarmenStampOffset_s; a log with every stamp at or after 1 s is kept as it is.
+constexpr double kCarmenStampOffset_s = 1.0;
+
+double carmen_stamp_offset(const io::CarmenLog& log) {
+  double first = std::numeric_limits<double>::infinity();
+  for (const io::CarmenScan& s : log.scans) first = std::min(first, s.scan.stamp_s);
+  for (const TimedPose& p : log.odometry) first = std::min(first, p.stamp_s);
+  return first < kCarmenStampOffset_s ? kCarmenStampOffset_s : 0.0;
+}
 
 FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
-                          const std::atomic<bool>* cancel) {
+                          const std::atomic<bool>* cancel, const Notice& notice) {
   FilterJobStats stats;
   stats.input_format = "carmen";
   const io::CarmenLog log = as_job([&] { return io::read_carmen_log(o.input); });
   stats.messages_in = log.lines;
   stats.malformed_lines = log.malformed_lines;
+  const double offset = carmen_stamp_offset(log);
+  stats.stamp_offset_s = offset;
+  if (offset > 0.0 && notice) {
+    notice(o.input +
+           " counts time from 0: every stamp is shifted by +1 s (a ROS bag holds no "
+           "time 0)");
+  }
   pipeline::ScanPeriod period;
   for (std::size_t i = 0; i < log.scans.size() && !period.period(); ++i) {
     period.add(log.scans[i].scan.stamp_s, 0.0);
@@ -193,29 +246,44 @@ FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
   ScanFilter filter(o, stats);
   const std::unique_ptr<io::RecordingWriter> out = create_recording(o.output, o.compression);
   as_job([&] {
-    // Odometry and scans in time order; a stamp that is not finite goes at its file position.
+    // The mounts, at the first stamp.
+    double first = std::numeric_limits<double>::infinity();
+    bool rear = false;
+    for (const io::CarmenScan& cs : log.scans) {
+      first = std::min(first, cs.scan.stamp_s);
+      rear = rear || cs.kind == "RLASER";
+    }
+    const io::Stamp start = io::Stamp::from_seconds(first + offset);
+    io::TransformsMessage mounts{{{start, "base_link", "laser", Pose2{}}}};
+    if (rear) mounts.transforms.push_back({start, "base_link", "rear_laser", Pose2{0.0, 0.0, kPi}});
+    out->write("/tf_static", start, mounts);
+
+    // ODOM lines and scans in time order.
     std::size_t next_odom = 0;
     const auto write_odom_until = [&](double t) {
       for (; next_odom < log.odometry.size() && log.odometry[next_odom].stamp_s <= t; ++next_odom) {
         const TimedPose& p = log.odometry[next_odom];
-        if (!std::isfinite(p.stamp_s) || p.stamp_s < 0.0) continue;
         const io::OdometryMessage msg =
-            io::odometry_message(p.stamp_s, "odom", "base_link", p.pose);
-        out->write("/odom", msg.header.stamp, msg);
+            io::odometry_message(p.stamp_s + offset, "odom", "base_link", p.pose);
+        out->write("/carmen_odom", msg.header.stamp, msg);
       }
     };
     for (std::size_t i = 0; i < log.scans.size(); ++i) {
       check_cancelled(cancel);
       const io::CarmenScan& cs = log.scans[i];
       write_odom_until(cs.scan.stamp_s);
-      if (!std::isfinite(cs.scan.stamp_s) || cs.scan.stamp_s < 0.0) {
-        ++stats.scans_skipped["bad_stamp"];
-        continue;
-      }
-      const io::ScanMessage msg =
-          io::scan_message(cs.scan, cs.kind == "RLASER" ? "rear_laser" : "laser");
-      const FilterResult& result =
-          filter.process(cs.scan, 0.0, o.static_sensor ? Pose2{} : cs.laser_pose, PoseLookup::kOk);
+      const bool is_rear = cs.kind == "RLASER";
+      LaserScan scan = cs.scan;
+      scan.stamp_s += offset;
+      const Pose2 laser = o.static_sensor ? Pose2{} : cs.laser_pose;
+      // The robot's pose that puts the laser there through its mount.
+      const Pose2 base =
+          is_rear ? Pose2{laser.x_m, laser.y_m, wrap_angle(laser.yaw_rad - kPi)} : laser;
+      const io::OdometryMessage odom =
+          io::odometry_message(scan.stamp_s, "odom", "base_link", base);
+      out->write("/odom", odom.header.stamp, odom);
+      const io::ScanMessage msg = io::scan_message(scan, is_rear ? "rear_laser" : "laser");
+      const FilterResult& result = filter.process(scan, 0.0, laser, PoseLookup::kOk);
       out->write(o.scan_topic, msg.header.stamp, msg);
       write_outputs(*out, o.scan_topic, msg.header.stamp, msg, result);
       if (progress && i % 64 == 0) {
@@ -239,7 +307,7 @@ FilterJobStats run_filter_job(const FilterJobOptions& options, const Progress& p
   if (options.output.empty()) throw JobError("no output file given (-o OUT.bag)");
   if (options.config_path) base_config(options);  // Fail on a bad config before any reading.
   if (ends_with(options.input, ".log") || ends_with(options.input, ".clf")) {
-    return run_carmen(options, progress, cancel);
+    return run_carmen(options, progress, cancel, notice);
   }
   return run_recording(options, progress, cancel, notice);
 }

@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "bag_contents.hpp"
+#include "dispel/io/recording_motion.hpp"
 #include "dispel/io/ros1_messages.hpp"
 #include "dispel/sim/raycast.hpp"
 #include "test_files.hpp"
@@ -398,28 +399,31 @@ TEST(FilterJobInput, CancellingLeavesNoOutput) {
 
 // --- CARMEN logs ------------------------------------------------------------------------------
 
-TEST(FilterJob, CarmenLogBecomesABagWithFilteredScans) {
-  // A FLASER log of a robot driving past a walking person, and its odometry.
-  const std::string log_path = temp_path("walk.log");
-  {
-    std::ofstream log(log_path);
-    log << "# CARMEN log written by the test\n";
-    sim::World world;
-    world.segments = {{{-5, -6}, {15, -6}}, {{15, -6}, {15, 6}}, {{15, 6}, {-5, 6}}};
-    const sim::ScanGeometry g{-kPi / 2.0, kPi / 360.0, 361, 0.001F, 80.0F};
-    for (int k = 0; k < 120; ++k) {
-      const double t = 5000.0 + 0.05 * k;
-      const Pose2 laser{0.02 * k, 0.0, 0.0};
-      sim::World now = world;
-      now.circles = {{{6.0, -3.0 + 0.06 * k}, 0.2}};
-      const LaserScan s = sim::raycast(now, laser, g);
-      log << "ODOM " << laser.x_m << " 0 0 0.4 0 0 " << std::fixed << t << " host " << t << "\n";
-      log << "FLASER 361";
-      for (float r : s.ranges_m) log << ' ' << (std::isfinite(r) ? r : 81.91F);
-      log << ' ' << laser.x_m << " 0 0 " << laser.x_m << " 0 0 " << t << " host " << t << "\n";
-    }
-    log << "FLASER garbage\n";
+// A FLASER log of a robot driving past a walking person, and its odometry: 120 scans, one every
+// @p step_s seconds from 5000 s, and a malformed line.
+void write_walk_log(const std::string& log_path, double step_s) {
+  std::ofstream log(log_path);
+  log << "# CARMEN log written by the test\n";
+  sim::World world;
+  world.segments = {{{-5, -6}, {15, -6}}, {{15, -6}, {15, 6}}, {{15, 6}, {-5, 6}}};
+  const sim::ScanGeometry g{-kPi / 2.0, kPi / 360.0, 361, 0.001F, 80.0F};
+  for (int k = 0; k < 120; ++k) {
+    const double t = 5000.0 + step_s * k;
+    const Pose2 laser{0.02 * k, 0.0, 0.0};
+    sim::World now = world;
+    now.circles = {{{6.0, -3.0 + 0.06 * k}, 0.2}};
+    const LaserScan s = sim::raycast(now, laser, g);
+    log << "ODOM " << laser.x_m << " 0 0 0.4 0 0 " << std::fixed << t << " host " << t << "\n";
+    log << "FLASER 361";
+    for (float r : s.ranges_m) log << ' ' << (std::isfinite(r) ? r : 81.91F);
+    log << ' ' << laser.x_m << " 0 0 " << laser.x_m << " 0 0 " << t << " host " << t << "\n";
   }
+  log << "FLASER garbage\n";
+}
+
+TEST(FilterJob, CarmenLogBecomesABagWithFilteredScans) {
+  const std::string log_path = temp_path("walk.log");
+  write_walk_log(log_path, 0.05);
   FilterJobOptions o;
   o.input = log_path;
   o.output = temp_path("walk.bag");
@@ -428,13 +432,75 @@ TEST(FilterJob, CarmenLogBecomesABagWithFilteredScans) {
   EXPECT_EQ(stats.scans, 120);
   EXPECT_EQ(stats.malformed_lines, 1);
   EXPECT_GT(stats.counters.beams_removed_dynamic, 300);
+  EXPECT_EQ(stats.scans_reset, 0);
+  EXPECT_FALSE(stats.mostly_unfiltered);
+  EXPECT_EQ(stats.warning, "");
   const BagContents out = read_bag(o.output);
   EXPECT_EQ(out.count.at("/scan"), 120u);
   EXPECT_EQ(out.count.at("/scan_filtered"), 120u);
   EXPECT_EQ(out.count.at("/scan_labels"), 120u);
-  EXPECT_EQ(out.count.at("/odom"), 120u);
+  EXPECT_EQ(out.count.at("/odom"), 120u);         // The laser lines' poses.
+  EXPECT_EQ(out.count.at("/carmen_odom"), 120u);  // The ODOM lines.
+  EXPECT_EQ(out.count.at("/tf_static"), 1u);
+  EXPECT_EQ(stats.stamp_offset_s, 0.0);  // Stamps from 5000 s: kept.
   EXPECT_EQ(out.scans.at("/scan").front().header.frame_id, "laser");
   std::remove(log_path.c_str());
+  std::remove(o.output.c_str());
+}
+
+// Issue 16: a subsampled log (848 of 910 scans reset the filter) was filtered into nothing while
+// the summary said only "0 dynamic removed". Now the job says so.
+TEST(FilterJob, ASparseLogWhoseScansMostlyResetTheFilterIsReported) {
+  const std::string log_path = temp_path("sparse.log");
+  write_walk_log(log_path, 2.0);  // Scans 2 s apart; max_time_gap_s is 1 s.
+  FilterJobOptions o;
+  o.input = log_path;
+  o.output = temp_path("sparse.bag");
+  const FilterJobStats stats = run_filter_job(o);
+  EXPECT_EQ(stats.scans, 120);
+  EXPECT_EQ(stats.scans_reset, 119);
+  EXPECT_TRUE(stats.mostly_unfiltered);
+  EXPECT_NE(stats.warning.find("119 of 120 scans reset the filter (119 after a time gap above "
+                               "max_time_gap_s 1 s"),
+            std::string::npos)
+      << stats.warning;
+  EXPECT_EQ(stats.counters.beams_removed_dynamic, 0);
+  std::remove(log_path.c_str());
+  std::remove(o.output.c_str());
+}
+
+// Issue 16: the classic corrected logs count time from 0, and a bag holds no time 0: every one
+// failed ("Tried to insert a message with time less than ros::TIME_MIN"). Now every stamp is
+// shifted by 1 s, and the output carries what render and slam need: /odom with the pose the
+// filter used and the laser's mount on /tf_static (read back by the same first pass as theirs).
+TEST(FilterJob, ACarmenLogFromTimeZeroIsShiftedAndCarriesOdometryAndMount) {
+  FilterJobOptions o;
+  o.input = source_path("data/carmen/leg_tracker_from0.log");
+  o.output = temp_path("from0.bag");
+  std::string notice;
+  const FilterJobStats stats =
+      run_filter_job(o, {}, nullptr, [&](const std::string& n) { notice += n; });
+  EXPECT_EQ(stats.scans, 100);
+  EXPECT_EQ(stats.scans_filtered, 100);
+  EXPECT_EQ(stats.stamp_offset_s, 1.0);
+  EXPECT_NE(notice.find("counts time from 0: every stamp is shifted by +1 s"), std::string::npos)
+      << notice;
+  EXPECT_GT(stats.counters.beams_removed_dynamic, 100);
+  const BagContents out = read_bag(o.output);
+  EXPECT_EQ(out.count.at("/odom"), 100u);
+  EXPECT_EQ(out.count.at("/tf_static"), 1u);
+  const auto& scans = out.scans.at("/scan");
+  ASSERT_EQ(scans.size(), 100u);
+  EXPECT_EQ(scans.front().header.stamp, ros::Time(1, 0));
+  EXPECT_NEAR((scans.back().header.stamp - scans.front().header.stamp).toSec(), 9.9, 0.05);
+
+  const std::unique_ptr<io::RecordingReader> bag = open_recording(o.output);
+  io::MotionQuery query;
+  query.scan_topic = "/scan";
+  query.pose_topic = "/odom";
+  const io::RecordingMotion motion = io::read_motion(*bag, query, [] {});
+  PoseLookup why = PoseLookup::kOk;
+  EXPECT_TRUE(motion.sensor_pose(scans[10].header.stamp.toSec(), &why)) << pose_lookup_name(why);
   std::remove(o.output.c_str());
 }
 

@@ -1,12 +1,16 @@
 #include "dispel/jobs/job.hpp"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
+#include <utility>
 
 #include "dispel/io/errors.hpp"
 #include "dispel/io/ros1_bag.hpp"
+#include "dispel/io/text.hpp"
 #ifdef DISPEL_HAVE_MRPT_RAWLOG
 #include "dispel/io/mrpt_rawlog.hpp"
 #endif
@@ -32,6 +36,123 @@ void rethrow_as_job_error() {
     throw JobError(e.what());
   } catch (const std::invalid_argument& e) {
     throw JobError(e.what());
+  }
+}
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string file_type(const fs::file_status& st) {
+  switch (st.type()) {
+    case fs::file_type::directory:
+      return "a directory";
+    case fs::file_type::fifo:
+      return "a FIFO";
+    case fs::file_type::character:
+      return "a character device";
+    case fs::file_type::block:
+      return "a block device";
+    case fs::file_type::socket:
+      return "a socket";
+    default:
+      return "not a regular file";
+  }
+}
+
+std::string named(const FileArgument& f) {
+  return (f.option.empty() ? "" : f.option + " ") + io::quote(f.path, 200);
+}
+
+// Where a file is or would be: for an existing file its inode decides (compared with
+// fs::equivalent), for a file not yet written its directory's canonical path and its name.
+struct Place {
+  bool exists = false;
+  bool special = false;  // A device or pipe: written in place.
+  fs::path path;         // Canonical when it does not exist yet.
+};
+
+Place place_of(const FileArgument& f) {
+  std::error_code ec;
+  Place p;
+  const fs::file_status st = fs::status(f.path, ec);
+  p.exists = !ec && fs::exists(st);
+  p.special = p.exists && !fs::is_regular_file(st) && !fs::is_directory(st);
+  if (p.exists) {
+    p.path = f.path;
+    return p;
+  }
+  const fs::path given(f.path);
+  fs::path parent = given.parent_path();
+  if (parent.empty()) parent = ".";
+  const fs::path dir = fs::weakly_canonical(parent, ec);
+  p.path = (ec ? parent : dir) / given.filename();
+  return p;
+}
+
+bool same_file(const Place& a, const Place& b) {
+  if (a.exists != b.exists) return false;
+  std::error_code ec;
+  if (a.exists) return fs::equivalent(a.path, b.path, ec) && !ec;
+  return a.path == b.path;
+}
+
+void check_output_place(const FileArgument& out) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(out.path, ec);
+  if (!ec && fs::is_directory(st)) throw JobError(named(out) + ": is a directory");
+  if (!ec && fs::exists(st) && !fs::is_regular_file(st)) return;  // /dev/null: written in place.
+  fs::path parent = fs::path(out.path).parent_path();
+  if (parent.empty()) parent = ".";
+  const fs::file_status dir = fs::status(parent, ec);
+  if (ec || !fs::exists(dir)) {
+    throw JobError(named(out) + ": the directory " + io::quote(parent.string(), 200) +
+                   " does not exist");
+  }
+  if (!fs::is_directory(dir)) {
+    throw JobError(named(out) + ": " + io::quote(parent.string(), 200) + " is not a directory");
+  }
+  if (::access(parent.c_str(), W_OK | X_OK) != 0) {
+    throw JobError(named(out) + ": cannot write in " + io::quote(parent.string(), 200) + " (" +
+                   std::strerror(errno) + ")");
+  }
+}
+
+}  // namespace
+
+void check_files(const std::vector<FileArgument>& inputs,
+                 const std::vector<FileArgument>& outputs) {
+  std::vector<std::pair<const FileArgument*, Place>> in, out;
+  for (const FileArgument& f : inputs) {
+    if (f.path.empty()) continue;
+    std::error_code ec;
+    const fs::file_status st = fs::status(f.path, ec);
+    if (ec || !fs::exists(st)) continue;  // The reader says "No such file" in its own words.
+    if (!fs::is_regular_file(st)) {
+      throw JobError(named(f) + ": not a regular file (" + file_type(st) + ")");
+    }
+    in.emplace_back(&f, place_of(f));
+  }
+  for (const FileArgument& f : outputs) {
+    if (f.path.empty()) continue;
+    check_output_place(f);
+    out.emplace_back(&f, place_of(f));
+  }
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const auto& [o, place] = out[i];
+    for (const auto& [input, input_place] : in) {
+      if (same_file(place, input_place)) {
+        throw JobError(named(*o) + " is the same file as the input " + named(*input) +
+                       "; the input would be overwritten");
+      }
+    }
+    if (place.special) continue;
+    for (std::size_t j = 0; j < i; ++j) {
+      if (same_file(place, out[j].second)) {
+        throw JobError(named(*o) + " and " + named(*out[j].first) +
+                       " are the same file; give each output its own");
+      }
+    }
   }
 }
 

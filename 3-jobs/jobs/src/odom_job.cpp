@@ -2,11 +2,13 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/csv.hpp"
 #include "dispel/io/odometry_inputs.hpp"
+#include "dispel/io/text.hpp"
 #include "dispel/pipeline/odometry_runner.hpp"
 
 namespace dispel::jobs {
@@ -220,11 +222,17 @@ OdomJobStats run_odom_job(const OdomJobOptions& o) {
     stats.counters = runner.counters();
     stats.final_estimate = runner.estimate();
     if (stats.rows == 0) throw JobError(stats.wheel_source + ": no usable wheel speeds");
+    // Both files written and closed before either appears: a write error leaves neither.
+    std::optional<io::CsvWriter> truth_out;
     if (!o.truth_csv.empty()) {
-      io::write_trajectory_csv(o.truth_csv, truth);
+      truth_out.emplace(o.truth_csv);
+      io::write_trajectory(*truth_out, truth);
       stats.truth_rows = static_cast<std::int64_t>(truth.size());
+      truth_out->close();
     }
+    out.close();
     out.commit();
+    if (truth_out) truth_out->commit();
   });
   return stats;
 }

@@ -4,7 +4,8 @@
 
 namespace dispel::jobs {
 void write_simulation(const sim::SimulationOutput& run, const sim::Scenario& scenario,
-                      const std::string& path) {
+                      const std::string& path, const std::atomic<bool>* cancel) {
+  check_cancelled(cancel);
   const std::unique_ptr<io::RecordingWriter> out = create_recording(path, Compression::kLz4);
   as_job([&] {
     const double t0 = run.sensors.empty() ? 0.0 : run.sensors.front().stamp_s;
@@ -31,6 +32,7 @@ void write_simulation(const sim::SimulationOutput& run, const sim::Scenario& sce
       }
     };
     for (const sim::SensorSample& s : run.sensors) {
+      check_cancelled(cancel);
       write_scans_until(s.stamp_s);
       const io::Stamp t = io::Stamp::from_seconds(s.stamp_s);
       out->write("/odom", t,

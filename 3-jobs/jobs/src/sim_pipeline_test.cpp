@@ -57,6 +57,21 @@ TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
   expect_error("actors: [{type: person}]", "actors[0] needs waypoints or standing");
   expect_error("world: {walls: [[0, 0, 1]]}", "world.walls[0] must be a list of 4 numbers");
   expect_error("robot: {speed_mps: fast}", "robot.speed_mps must be a number");
+  // Issue 16: NaN and infinite walls and noise were accepted.
+  expect_error("world: {walls: [[0, 0, .nan, 1]]}",
+               "world.walls[0][2] must be a finite number, got '.nan'");
+  expect_error("world: {walls: [[0, 0, .inf, 1]]}", "world.walls[0][2] must be a finite number");
+  expect_error("lidar: {range_noise_m: -.inf}", "lidar.range_noise_m must be a finite number");
+  expect_error("", "s.yaml: the scenario file is empty");
+  expect_error("# nothing\n", "s.yaml: the scenario file is empty");
+  expect_error("[1, 2]", "s.yaml: the file must be a mapping");
+  // An echoed value is cut: a 1 MB word gives a short line.
+  try {
+    parse_scenario("robot: {speed_mps: " + std::string(1000000, 'x') + "}", "s.yaml");
+    ADD_FAILURE();
+  } catch (const ConfigError& e) {
+    EXPECT_LT(std::string(e.what()).size(), 200u) << e.what();
+  }
 }
 
 TEST(SimPipeline, SimulatedBagHasEveryTopicAndFiltersAndEvaluates) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "dispel/io/text.hpp"
 #include "dispel/jobs/job.hpp"
 #include "dispel/render/canvas.hpp"
 #include "dispel/render/render.hpp"
@@ -216,8 +217,8 @@ std::pair<int, int> parse_image_size(const std::string& text) {
   const auto x = text.find_first_of("xX");
   const auto bad = [&text]() {
     return jobs::JobError(
-        "picture size '" + text +
-        "' is not WIDTHxHEIGHT in pixels, each from 200 to 10000 (e.g. 1600x1200)");
+        "picture size " + io::quote(text) +
+        " is not WIDTHxHEIGHT in pixels, each from 200 to 10000 (e.g. 1600x1200)");
   };
   if (x == std::string::npos) throw bad();
   const std::string w = text.substr(0, x), h = text.substr(x + 1);

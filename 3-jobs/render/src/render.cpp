@@ -4,6 +4,7 @@
 
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/recording_motion.hpp"
+#include "dispel/io/text.hpp"
 #include "dispel/jobs/job.hpp"
 #include "layout.hpp"
 
@@ -13,10 +14,10 @@ using jobs::JobError;
 
 RenderResult render_bag(const RenderOptions& o, const std::atomic<bool>* cancel) {
   if (o.view != "map" && o.view != "scan") {
-    throw JobError("unknown view '" + o.view + "' (use --view map or --view scan)");
+    throw JobError("unknown view " + io::quote(o.view) + " (use --view map or --view scan)");
   }
   if (o.frame != "odom" && o.frame != "truth") {
-    throw JobError("unknown frame '" + o.frame + "' (use --frame odom or --frame truth)");
+    throw JobError("unknown frame " + io::quote(o.frame) + " (use --frame odom or --frame truth)");
   }
   if (o.width_px < 200 || o.height_px < 200 || o.width_px > 10000 || o.height_px > 10000) {
     throw JobError("picture size " + std::to_string(o.width_px) + "x" +

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "dispel/io/atomic_file.hpp"
+#include "dispel/io/text.hpp"
 #include "dispel/jobs/job.hpp"
 
 namespace dispel::slam {
@@ -54,7 +55,7 @@ std::string exact(double v) {
 
 YAML::Node required(const YAML::Node& root, const std::string& key, const std::string& path) {
   const YAML::Node node = root[key];
-  if (!node) throw JobError(path + ": no '" + key + "' key (map_server needs it)");
+  if (!node) throw JobError(path + ": no " + io::quote(key) + " key (map_server needs it)");
   return node;
 }
 
@@ -101,7 +102,7 @@ int pgm_header_number(std::istream& in, const std::string& path, const char* wha
   char* end = nullptr;
   const long v = std::strtol(token.c_str(), &end, 10);
   if (*end != '\0' || v <= 0 || v > 1000000) {
-    throw JobError(path + ": PGM " + what + " '" + token + "' is not a positive integer");
+    throw JobError(path + ": PGM " + what + " " + io::quote(token) + " is not a positive integer");
   }
   return static_cast<int>(v);
 }
@@ -138,8 +139,8 @@ Pgm read_pgm(const std::string& path) {
       char* end = nullptr;
       const long v = std::strtol(token.c_str(), &end, 10);
       if (*end != '\0' || v < 0 || v > maxval) {
-        throw JobError(path + ": pixel " + std::to_string(got) + " '" + token +
-                       "' is not a value in 0.." + std::to_string(maxval));
+        throw JobError(path + ": pixel " + std::to_string(got) + " " + io::quote(token) +
+                       " is not a value in 0.." + std::to_string(maxval));
       }
       pgm.pixels[got++] = static_cast<int>(v);
     }
@@ -254,7 +255,7 @@ GridMap read_map_yaml(const std::string& path) {
   std::string mode = "trinary";
   if (const YAML::Node m = root["mode"]) mode = m.as<std::string>("");
   if (mode != "trinary" && mode != "scale" && mode != "raw") {
-    throw JobError(path + ": mode '" + mode + "': expected trinary, scale or raw");
+    throw JobError(path + ": mode " + io::quote(mode) + ": expected trinary, scale or raw");
   }
   std::string image;
   try {

@@ -29,4 +29,8 @@ class AtomicFile {
   bool direct_ = false;  ///< Written in place (a device or a pipe).
 };
 
+/// Writes @p text to @p path through an AtomicFile, checking every write, the flush and the
+/// close. @throws OutputError "<path>: cannot write (<reason>)"; nothing is left behind then.
+void write_file_atomically(const std::string& path, const std::string& text);
+
 }  // namespace dispel::io

@@ -39,7 +39,9 @@ struct CarmenLog {
 };
 
 /// Reads a CARMEN log. Malformed laser and odometry lines are skipped and counted.
-/// @throws InputError (errors.hpp) if the file cannot be read or holds no laser line at all.
+/// @throws InputError (errors.hpp) if the file cannot be read, holds no laser line at all, or
+/// has a stamp (ipc_timestamp) that is not finite, negative, or not below 2^32 - 1 s:
+/// "<path>: line N (FLASER): ipc_timestamp '5e9' is not a time a recording can hold (...)".
 CarmenLog read_carmen_log(const std::string& path, float old_max_range_m = 80.0F);
 
 /// Parses the text of a log (for tests); @p origin names it in errors.

@@ -44,12 +44,18 @@ class CsvWriter {
   void line(const std::string& text);
   /// Appends formatted text as std::fprintf does.
   void printf(const char* format, ...) __attribute__((format(printf, 2, 3)));
-  /// Flushes and moves the file into place. @throws OutputError when writing failed.
+  /// Flushes and closes the file, not yet under its name (for several files that appear
+  /// together: close() them all, then commit()). @throws OutputError when writing failed.
+  void close();
+  /// close() if not done, and moves the file into place. @throws OutputError when writing failed.
   void commit();
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Writes the header t,x,y,yaw and one row per point of @p trajectory (as write_trajectory_csv).
+void write_trajectory(CsvWriter& out, const std::vector<eval::TrajectoryPoint>& trajectory);
 
 }  // namespace dispel::io

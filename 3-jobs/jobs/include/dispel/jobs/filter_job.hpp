@@ -55,7 +55,16 @@ struct FilterJobStats {
   DynamicFilterConfig config;  ///< The configuration used (scaled to the scanner if asked).
   std::optional<double> scan_period_s;  ///< The scanner's period, when it was needed and known.
   std::int64_t malformed_lines = 0;     ///< CARMEN only: skipped lines.
-  std::int64_t odometry_refused = 0;    ///< Odometry messages out of order or not finite.
+  /// Scans that reset the filter's tracks (a time gap above max_time_gap_s, time going back, a
+  /// pose jump): each starts anew, so nothing on it is found moving.
+  std::int64_t scans_reset = 0;
+  /// More than half of the scans reset the filter or were passed through: the output is hardly
+  /// filtered (a sparse or subsampled log, missing odometry). `warning` says why, in one line.
+  bool mostly_unfiltered = false;
+  std::string warning;
+  /// CARMEN only: added to every stamp (1 s for a log that counts time from 0, else 0).
+  double stamp_offset_s = 0.0;
+  std::int64_t odometry_refused = 0;  ///< Odometry messages out of order or not finite.
 };
 
 /// Told once, before the scans are filtered, something the user should know (laser-only).

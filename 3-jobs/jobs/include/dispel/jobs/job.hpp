@@ -8,6 +8,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "dispel/io/recording.hpp"
 
@@ -33,6 +34,22 @@ void check_cancelled(const std::atomic<bool>* cancel);
 
 /// @throws JobError "<path>: <reason>" unless @p path is a regular file that exists.
 void check_input_file(const std::string& path);
+
+/// A file a command reads or writes, with the option that names it ("-o", "--stats", "input").
+struct FileArgument {
+  std::string option;
+  std::string path;
+};
+
+/// Checks, before any work, the files of one command:
+/// - every input that exists is a regular file (a directory or a FIFO is refused by its type,
+///   never opened; a missing input is left to the reader, which names it);
+/// - every output's directory exists and is writable, and the output is not a directory;
+/// - no output is the same file as an input or as another output: the same inode for files that
+///   exist (std::filesystem::equivalent), the same canonical directory and name for outputs not
+///   yet written. A device or pipe output (/dev/null) is written in place and may repeat.
+/// Empty paths are skipped. @throws JobError naming the option(s) and the file
+void check_files(const std::vector<FileArgument>& inputs, const std::vector<FileArgument>& outputs);
 
 /// Opens a recording by its file's name: an MRPT rawlog for ".rawlog" or ".rawlog.gz" (plain or
 /// gzip-compressed), a ROS 1 bag otherwise. @throws JobError "<path>: not a readable ROS 1 bag

@@ -13,8 +13,9 @@ namespace dispel::jobs {
 /// index of the actor hit + 1, 0 for none), /odom (wheel odometry), /wheels (JointState velocity
 /// = [left, right] m/s), /imu (angular_velocity.z; orientation unknown, covariance[0] = -1),
 /// /ground_truth (Odometry) and /tf_static (base_link -> laser), LZ4-compressed. Written to
-/// "<path>.partial" and renamed when complete. @throws JobError
+/// "<path>.partial" and renamed when complete; when @p cancel becomes true, or on an error, the
+/// partial file is removed. @throws JobError, JobCancelled
 void write_simulation(const sim::SimulationOutput& run, const sim::Scenario& scenario,
-                      const std::string& path);
+                      const std::string& path, const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace dispel::jobs

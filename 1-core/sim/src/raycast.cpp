@@ -65,7 +65,7 @@ LaserScan raycast(const World& world, const Pose2& sensor_pose, const ScanGeomet
     }
     for (std::size_t c = 0; c < world.circles.size(); ++c) {
       const double t = ray_distance(world.circles[c], origin, direction);
-      if (t < best) {
+      if (t < best && t <= world.circles[c].seen_within_m) {
         best = t;
         best_id = segment_count + static_cast<std::int32_t>(c);
       }

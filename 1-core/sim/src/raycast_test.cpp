@@ -38,6 +38,21 @@ TEST(Raycast, NearestShapeWinsAndMissesAreInfinite) {
   for (std::int32_t h : hit) EXPECT_EQ(h, kNoHit);
 }
 
+TEST(Raycast, ALowThingIsHitOnlyFromNearerThanItsSeenWithin) {
+  // A box below a scan plane tilted up: the beams pass over it from afar and see the wall.
+  World world;
+  world.segments = {{{4.0, -1.0}, {4.0, 1.0}}};
+  world.circles = {{{2.0, 0.0}, 0.2, 1.5}};
+  const ScanGeometry g{0.0, 0.1, 1, 0.1F, 10.0F};
+  std::vector<std::int32_t> hit;
+  LaserScan far = raycast(world, Pose2{0.0, 0.0, 0.0}, g, &hit);
+  EXPECT_NEAR(far.ranges_m[0], 4.0F, 1e-5F);
+  EXPECT_EQ(hit[0], 0);
+  LaserScan near = raycast(world, Pose2{0.5, 0.0, 0.0}, g, &hit);  // 1.3 m to its face.
+  EXPECT_NEAR(near.ranges_m[0], 1.3F, 1e-5F);
+  EXPECT_EQ(hit[0], 1);
+}
+
 TEST(Raycast, HitsBeyondRangeMaxAreNoReturn) {
   World world;
   world.segments = {{{20.0, -1.0}, {20.0, 1.0}}};

@@ -177,6 +177,14 @@ void add_rough_wall(const Segment& wall, const RoughWalls& rw, std::mt19937_64& 
       out.circles.push_back({at(along, off), 0.025});
       out.circles.push_back({at(std::min(length, along + 0.5), off), 0.025});
     }
+    if (rw.low_things_per_10m > 0.0 && u01(rng) < rw.low_things_per_10m * piece / 10.0) {
+      const double side = u01(rng) < 0.5 ? -1.0 : 1.0;
+      const double along = s + u01(rng) * piece;
+      const double radius = 0.075 + u01(rng) * 0.075;
+      const double off =
+          side * (radius + 0.05 + u01(rng) * 0.3);  // Against the wall, as furniture.
+      out.circles.push_back({at(along, off), radius, 0.8 + u01(rng) * 1.2});
+    }
     s += piece;
   }
 }
@@ -262,6 +270,8 @@ void Scenario::validate() const {
       reject("world.rough_walls.legs_per_10m", w.legs_per_10m, "in [0, 20]");
     if (!(w.glass_share >= 0.0 && w.glass_share < 1.0))
       reject("world.rough_walls.glass_share", w.glass_share, "in [0, 1)");
+    if (!(w.low_things_per_10m >= 0.0 && w.low_things_per_10m <= 20.0))
+      reject("world.rough_walls.low_things_per_10m", w.low_things_per_10m, "in [0, 20]");
   }
   for (std::size_t i = 0; i < world.shelves.size(); ++i) {
     const ShelfRow& r = world.shelves[i];

@@ -203,6 +203,37 @@ TEST(Simulator, RoughWallsHaveRecessesGapsAndLegsAndStayStatic) {
   EXPECT_GT(no_return, smooth_no_return + 20);
 }
 
+// Low things against the walls (a chair seat, a box below a scan plane tilted up) return only to
+// beams from nearer than 0.8-2 m; from farther the beams see the wall behind them.
+TEST(Simulator, LowThingsAreSeenOnlyFromNearby) {
+  Scenario s = room_with_walker();
+  s.actors.clear();
+  s.duration_s = 0.5;
+  s.world.walls = {{{-10, -1.5}, {10, -1.5}}, {{-10, 1.5}, {10, 1.5}}};
+  s.world.rough_walls = RoughWalls{};
+  s.world.rough_walls->amplitude_m = 0.0;
+  s.world.rough_walls->doors_per_10m = 0.0;
+  s.world.rough_walls->legs_per_10m = 0.0;
+  s.world.rough_walls->glass_share = 0.0;
+  s.world.rough_walls->low_things_per_10m = 10.0;
+  const SimulationOutput out = simulate(s, 4);
+  const ScanFrame& f = out.scans[0];
+  const Pose2 laser = f.base_pose * s.robot.laser_mount;
+  int low = 0, wall = 0;
+  for (std::size_t i = 0; i < f.scan.size(); ++i) {
+    if (f.truth[i] == Truth::kNoReturn) continue;
+    const Eigen::Vector2d p = beam_point(f, laser, i);
+    if (std::abs(p.y()) < 1.45) {
+      ++low;
+      EXPECT_LE(f.scan.ranges_m[i], 2.0F + 0.1F) << "beam " << i;
+    } else {
+      ++wall;  // Including behind low things farther along it than they are seen from.
+    }
+  }
+  EXPECT_GT(low, 10);
+  EXPECT_GT(wall, 200);
+}
+
 // Range noise that grows with range, and mixed pixels at depth edges.
 TEST(Simulator, NoiseGrowsWithRangeAndMixedPixelsFallBetweenSurfaces) {
   Scenario s = room_with_walker();
@@ -274,6 +305,9 @@ TEST(Scenario, BadValuesAreRejectedByName) {
   s.world.rough_walls = RoughWalls{};
   s.world.rough_walls->glass_share = std::nan("");
   expect_named(s, "world.rough_walls.glass_share");
+  s.world.rough_walls = RoughWalls{};
+  s.world.rough_walls->low_things_per_10m = -1.0;
+  expect_named(s, "world.rough_walls.low_things_per_10m");
   s = Scenario{};
   s.world.shelves = {ShelfRow{}};
   s.world.shelves[0].bay_m = 0.0;

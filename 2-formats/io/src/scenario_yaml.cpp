@@ -87,12 +87,16 @@ void read_world(const Reader& r, const YAML::Node& n, sim::StaticWorld& w) {
     const YAML::Node& e = n["rough_walls"];
     r.keys(e, "world.rough_walls",
            {"amplitude_m", "piece_min_m", "piece_max_m", "doors_per_10m", "legs_per_10m",
-            "glass_share"});
+            "glass_share", "low_things_per_10m"});
     sim::RoughWalls rw;
     const std::pair<const char*, double*> fields[] = {
-        {"amplitude_m", &rw.amplitude_m},   {"piece_min_m", &rw.piece_min_m},
-        {"piece_max_m", &rw.piece_max_m},   {"doors_per_10m", &rw.doors_per_10m},
-        {"legs_per_10m", &rw.legs_per_10m}, {"glass_share", &rw.glass_share}};
+        {"amplitude_m", &rw.amplitude_m},
+        {"piece_min_m", &rw.piece_min_m},
+        {"piece_max_m", &rw.piece_max_m},
+        {"doors_per_10m", &rw.doors_per_10m},
+        {"legs_per_10m", &rw.legs_per_10m},
+        {"glass_share", &rw.glass_share},
+        {"low_things_per_10m", &rw.low_things_per_10m}};
     for (const auto& [key, field] : fields) {
       if (e[key]) *field = r.number(e[key], std::string("world.rough_walls.") + key);
     }

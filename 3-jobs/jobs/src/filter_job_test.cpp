@@ -217,8 +217,9 @@ std::string write_sim_bag(const std::string& name, const SimBagOptions& opt) {
 // negative_2.bag (angusleigh/leg_tracker, BSD): a robot driving through a building with three
 // 768-beam lasers, no odometry and no people: every beam removed is a false removal. Each laser
 // is filtered laser-only (the recording has no odometry topic: the job says so), every scan
-// registers to the map of the earlier ones, and at most 1.5 % of the valid beams are removed.
-// (Measured 0.31-0.90 %; the target is 0.2 %, not reached: README "Results".)
+// registers to the map of the earlier ones, and at most 0.6 % of the valid beams are removed.
+// (Measured 0.10-0.29 % on December 2, 0.22-0.71 % before the free-space verdict was weighed
+// again; the target is 0.2 %, not reached on the left laser: docs/results.md.)
 TEST(FilterJobLaserOnly, RealRobotWithoutOdometryOrPeopleKeepsItsWalls) {
   for (const std::string laser : {"/left_scan", "/right_scan", "/rear_scan"}) {
     FilterJobOptions o;
@@ -248,7 +249,7 @@ TEST(FilterJobLaserOnly, RealRobotWithoutOdometryOrPeopleKeepsItsWalls) {
       }
     }
     EXPECT_GT(valid, 200000) << laser;
-    EXPECT_LE(static_cast<double>(removed), 0.015 * static_cast<double>(valid))
+    EXPECT_LE(static_cast<double>(removed), 0.006 * static_cast<double>(valid))
         << laser << ": " << removed << " of " << valid << " valid beams removed";
     std::remove(o.output.c_str());
   }

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "dispel/core/laser_scan.hpp"
@@ -22,6 +23,9 @@ struct Segment {
 struct Circle {
   Eigen::Vector2d center = Eigen::Vector2d::Zero();
   double radius_m = 0.0;
+  /// Beams that reach it from farther than this pass over it (a chair seat or a box just below a
+  /// scan plane tilted up: only the near part of the plane is low enough to hit it).
+  double seen_within_m = std::numeric_limits<double>::infinity();
 };
 
 /// Everything a beam can hit. Shape ids: segments are 0..S-1, circles S..S+C-1.

@@ -62,8 +62,8 @@ struct FilterCounters {
   /// Beams of dynamic tracks kept because they end where something has stood for a while
   /// (free_space.keep_long_occupied).
   std::int64_t beams_kept_long_occupied = 0;
-  /// Tracks made dynamic by free space that then stood still (static again; see
-  /// free_space.md in docs/dynamic_filter.md).
+  /// Tracks made dynamic by free space that had not moved like a walker 0.4 s later (static
+  /// again; docs/dynamic_filter.md, "Per scan", free space).
   std::int64_t free_space_refuted = 0;
   /// Beams of no object removed as fragments of a dynamic track (tracking.fragment_distance_m);
   /// included in beams_removed_dynamic.

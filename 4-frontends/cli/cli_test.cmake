@@ -395,3 +395,32 @@ if(NOT rc EQUAL 0 OR NOT se MATCHES "warning: 19 of 20 scans reset the filter .1
   message(FATAL_ERROR "sparse log: no warning or statistics (${rc}): ${se}\n${sparse_stats}")
 endif()
 message(STATUS "a sparse log is reported")
+
+# Issue 16, item 3: a corrupt bag crashed dispel filter and odom (SIGSEGV in the bag library,
+# OUT.bag.partial left behind) or made the bag library allocate without bound. The first index
+# data record of a simulated bag: "op=\x04" is the third of its header fields (conn, count, op,
+# ver), so its data length is 16 bytes after that and its first entry's time and offset 24.
+run_dispel(rc so se sim ${SOURCE_DIR}/config/scenarios/empty_hall.yaml -o ${WORK_DIR}/hall.bag
+           --duration 3)
+file(READ ${WORK_DIR}/hall.bag hall HEX)
+string(FIND "${hall}" "6f703d04" op_hex)
+math(EXPR op_pos "${op_hex} / 2")
+math(EXPR index_pos "${op_pos} - 35")
+function(corrupt name at bytes)
+  file(COPY_FILE ${WORK_DIR}/hall.bag ${WORK_DIR}/${name}.bag)
+  execute_process(COMMAND sh -c "printf '${bytes}' | dd of=${WORK_DIR}/${name}.bag bs=1 seek=${at} conv=notrunc 2>/dev/null"
+                  RESULT_VARIABLE rc)
+endfunction()
+math(EXPR at "${op_pos} + 24")
+corrupt(entry ${at} "\\177\\177\\177\\177\\177\\177\\177\\177")
+math(EXPR at "${op_pos} + 16")
+corrupt(length ${at} "\\377\\377\\377\\177")
+set(bad_entry "corrupt bag: record at byte ${index_pos}: index entry 0 points at byte 2139062143 of its chunk")
+set(bad_length "corrupt bag: record at byte ${index_pos}: data of 2147483647 bytes runs past the end")
+foreach(case entry length)
+  expect_refused(1 "^dispel filter: .*${case}.bag: ${bad_${case}}" ${WORK_DIR}/corrupt_out.bag
+                 ${DISPEL} filter ${WORK_DIR}/${case}.bag -o ${WORK_DIR}/corrupt_out.bag)
+  expect_refused(1 "^dispel odom: .*${case}.bag: ${bad_${case}}" ${WORK_DIR}/corrupt_out.csv
+                 ${DISPEL} odom ${WORK_DIR}/${case}.bag -o ${WORK_DIR}/corrupt_out.csv)
+endforeach()
+message(STATUS "a corrupt bag: one line naming the record, exit 1, nothing left behind")

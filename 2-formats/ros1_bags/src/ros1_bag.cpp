@@ -12,6 +12,7 @@
 #include <optional>
 #include <vector>
 
+#include "bag_check.hpp"
 #include "dispel/io/atomic_file.hpp"
 #include "dispel/io/errors.hpp"
 #include "dispel/io/ros1_messages.hpp"
@@ -101,6 +102,9 @@ struct Ros1BagReader::Impl {
 
 Ros1BagReader::Ros1BagReader(const std::string& path) : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
+  // The bag library trusts the bag's lengths and offsets: a corrupt one crashed it (SIGSEGV) or
+  // made it allocate without bound. They are checked first: InputError "corrupt bag: ...".
+  check_bag_structure(path);
   try {
     impl_->bag.open(path, rosbag::bagmode::Read);
   } catch (const std::exception& e) {

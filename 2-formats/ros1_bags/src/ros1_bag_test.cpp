@@ -17,9 +17,14 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <random>
 #include <string>
+#include <vector>
 
 #include "dispel/io/errors.hpp"
 #include "dispel/io/ros1_messages.hpp"
@@ -302,6 +307,238 @@ TEST(Ros1BagWriter, RefusesTimesABagCannotHold) {
   rosbag::Bag bag(path, rosbag::bagmode::Read);
   EXPECT_EQ(rosbag::View(bag).size(), 2u);
   std::remove(path.c_str());
+}
+
+// --- Corrupt bags (issue 16): checked before the bag library reads them -----------------------
+
+std::string slurp(const std::string& path) {
+  std::string bytes;
+  if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+    char buffer[65536];
+    for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, f)) > 0;) bytes.append(buffer, n);
+    std::fclose(f);
+  }
+  return bytes;
+}
+
+void spill(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// A bag of 40 steps of five topics in chunks of about 20 kB (several chunks, each followed by
+// its index data); its bytes.
+std::string small_bag(rosbag::compression::CompressionType compression) {
+  const std::string path = ::testing::TempDir() + "/small_" + std::to_string(::getpid()) + "_" +
+                           std::to_string(static_cast<int>(compression)) + ".bag";
+  {
+    rosbag::Bag bag(path, rosbag::bagmode::Write);
+    bag.setCompression(compression);
+    bag.setChunkThreshold(20000);
+    for (int k = 0; k < 40; ++k) {
+      const Recorded r = sample(k);
+      const ros::Time t = r.scan.header.stamp;
+      bag.write("/scan", t, r.scan);
+      bag.write("/odom", t, r.odom);
+      bag.write("/imu", t, r.imu);
+      bag.write("/wheels", t, r.wheels);
+      bag.write(k == 0 ? "/tf_static" : "/tf", t, r.tf);
+    }
+  }
+  std::string bytes = slurp(path);
+  std::remove(path.c_str());
+  return bytes;
+}
+
+std::uint32_t u32_at(const std::string& b, std::size_t pos) {
+  std::uint32_t v = 0;
+  std::memcpy(&v, b.data() + pos, 4);
+  return v;
+}
+
+struct RecordAt {
+  std::size_t pos, data_len_pos;
+  char op;
+};
+
+// The file's records (not a chunk's), from a well-formed bag.
+std::vector<RecordAt> records_of(const std::string& b) {
+  std::vector<RecordAt> out;
+  for (std::size_t pos = 13; pos + 8 <= b.size();) {
+    const std::uint32_t header_len = u32_at(b, pos);
+    const std::string header = b.substr(pos + 4, header_len);
+    const std::size_t op = header.find("op=");
+    out.push_back({pos, pos + 4 + header_len, header.at(op + 3)});
+    pos += 8 + header_len + u32_at(b, pos + 4 + header_len);
+  }
+  return out;
+}
+
+RecordAt first(const std::string& b, char op) {
+  for (const RecordAt& r : records_of(b))
+    if (r.op == op) return r;
+  throw std::runtime_error("no such record");
+}
+
+// What reading the bag at @p path says: "" if it reads whole.
+std::string read_error(const std::string& path) {
+  try {
+    Ros1BagReader reader(path);
+    reader.read({}, [](const RecordedMessage& m) { (void)m.scan(); });
+    return "";
+  } catch (const InputError& e) {
+    return e.what();
+  }
+}
+
+// Issue 16, item 3: 8 bytes of the first index data record set to 0x7f crashed dispel (SIGSEGV
+// in rosbag::Bag::readHeaderFromBuffer), or were read as a bag that is fine.
+TEST(Ros1BagReader, RefusesACorruptIndexNamingTheRecord) {
+  const std::string good = small_bag(rosbag::compression::Uncompressed);
+  const RecordAt index = first(good, 0x04);
+  const std::string path = ::testing::TempDir() + "/corrupt_index_" + std::to_string(::getpid());
+  const std::string size = std::to_string(good.size());
+  const std::string at = path + ": corrupt bag: record at byte " + std::to_string(index.pos);
+
+  std::string bad = good;  // Its length and first entry's time.
+  std::memset(&bad[index.data_len_pos], 0x7f, 8);
+  spill(path, bad);
+  EXPECT_EQ(read_error(path),
+            at + ": data of 2139062143 bytes runs past the end (the file has " + size + " bytes)");
+
+  bad = good;  // Its first entry's time and offset (the crash).
+  std::memset(&bad[index.data_len_pos + 8], 0x7f, 8);
+  spill(path, bad);
+  EXPECT_EQ(read_error(path), at + ": index entry 0 points at byte 2139062143 of its chunk, not "
+                                   "at a message of connection 0");
+
+  bad = good;  // An offset inside the chunk, into a message's middle.
+  bad[index.data_len_pos + 12] = static_cast<char>(bad[index.data_len_pos + 12] + 8);
+  spill(path, bad);
+  EXPECT_NE(read_error(path).find(at + ": index entry 0 points at byte "), std::string::npos);
+
+  spill(path, good);
+  EXPECT_EQ(read_error(path), "");
+  std::remove(path.c_str());
+}
+
+// Issue 16, item 3: a length field of 0x7fffffff made the bag library allocate without bound.
+TEST(Ros1BagReader, RefusesLengthsThatDoNotFit) {
+  const std::string good = small_bag(rosbag::compression::Uncompressed);
+  const std::string path = ::testing::TempDir() + "/corrupt_length_" + std::to_string(::getpid());
+  const std::string size = std::to_string(good.size());
+  const RecordAt chunk = first(good, 0x05);
+  const auto set = [&](std::size_t pos) {
+    std::string bad = good;
+    const std::uint32_t v = 0x7fffffff;
+    std::memcpy(&bad[pos], &v, 4);
+    spill(path, bad);
+    return read_error(path);
+  };
+  const std::string at = path + ": corrupt bag: record at byte " + std::to_string(chunk.pos);
+  EXPECT_EQ(set(chunk.pos), at + ": a header of 2147483647 bytes runs past the end (the file has " +
+                                size + " bytes)");
+  EXPECT_EQ(set(chunk.data_len_pos),
+            at + ": data of 2147483647 bytes runs past the end (the file has " + size + " bytes)");
+  // The chunk's uncompressed size: its header's last field (size=<4 bytes>).
+  EXPECT_EQ(set(chunk.data_len_pos - 4),
+            at + ": chunk of 2147483647 bytes uncompressed (a chunk is at most 1 GiB; rosbag "
+                 "writes 768 KiB)");
+  // A header field's length (the chunk's first field).
+  EXPECT_EQ(set(chunk.pos + 4), at + ": header: a field of 2147483647 bytes is longer than the " +
+                                    std::to_string(u32_at(good, chunk.pos) - 4) +
+                                    " bytes left of it");
+  // The bag header's index position (index_pos=<8 bytes>, its first field here).
+  const std::size_t index_pos = good.find("index_pos=") + 10;
+  ASSERT_LT(index_pos, 100u);
+  EXPECT_EQ(set(index_pos), path +
+                                ": corrupt bag: record at byte 13: the index at byte 2147483647 "
+                                "is outside the file's records (4117 to " +
+                                size + ")");
+  std::remove(path.c_str());
+}
+
+// Seeded corruptions of bags of each compression (bytes flipped, 8 bytes set to 0x7f, a record's
+// length overwritten, the file cut short), each read and copied into a new bag in a child
+// process: it reads whole or fails with a one-line error naming the file; no signal, no output
+// or partial output left after a failure.
+TEST(Ros1BagReader, SeededCorruptionsReadOrFailCleanly) {
+  const std::vector<std::string> bags = {small_bag(rosbag::compression::Uncompressed),
+                                         small_bag(rosbag::compression::LZ4),
+                                         small_bag(rosbag::compression::BZ2)};
+  const std::string dir = ::testing::TempDir() + "/fuzz_" + std::to_string(::getpid());
+  ::mkdir(dir.c_str(), 0700);
+  const std::string in = dir + "/in.bag";
+  const std::string out = dir + "/out.bag";
+  int read = 0, refused = 0;
+  for (std::uint32_t seed = 1; seed <= 400; ++seed) {
+    std::mt19937 rng(seed);
+    std::string b = bags[seed % 3];
+    const auto below = [&](std::size_t n) {
+      return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng);
+    };
+    const std::vector<RecordAt> records = records_of(b);
+    switch (seed / 3 % 4) {
+      case 0:  // A few bytes flipped.
+        for (std::size_t i = 0, n = 1 + below(4); i < n; ++i)
+          b[below(b.size())] ^= static_cast<char>(1 << below(8));
+        break;
+      case 1:  // Cut short.
+        b.resize(below(b.size()));
+        break;
+      case 2: {  // A record's header or data length, or a header field's length, overwritten.
+        const RecordAt& r = records[below(records.size())];
+        const std::size_t pos = below(3) == 0 ? r.pos : below(2) ? r.data_len_pos : r.pos + 4;
+        const std::uint32_t values[] = {0,
+                                        1,
+                                        0x7fffffff,
+                                        0xffffffff,
+                                        u32_at(b, pos) + static_cast<std::uint32_t>(below(16)) - 8,
+                                        static_cast<std::uint32_t>(below(b.size()))};
+        std::memcpy(&b[pos], &values[below(6)], 4);
+        break;
+      }
+      default: {  // 8 bytes set to 0x7f, anywhere.
+        const std::size_t pos = below(b.size() - 8);
+        std::memset(&b[pos], 0x7f, 8);
+      }
+    }
+    spill(in, b);
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      const rlimit memory{std::uint64_t{4} << 30, std::uint64_t{4} << 30};
+      ::setrlimit(RLIMIT_AS, &memory);
+      try {
+        Ros1BagReader reader(in);
+        Ros1BagWriter writer(out, BagCompression::kNone);
+        reader.read({}, [&](const RecordedMessage& m) {
+          (void)m.scan();
+          (void)m.odometry();
+          writer.copy(m);
+        });
+        writer.finish();
+        std::_Exit(0);
+      } catch (const InputError& e) {
+        const std::string m = e.what();
+        std::_Exit(m.rfind(in + ": ", 0) == 0 && m.find('\n') == std::string::npos ? 1 : 2);
+      } catch (...) {
+        std::_Exit(3);
+      }
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFEXITED(status)) << "seed " << seed << ": signal " << WTERMSIG(status);
+    const int code = WEXITSTATUS(status);
+    ASSERT_LE(code, 1) << "seed " << seed << ": 2: not one line naming the file, 3: not an "
+                       << "InputError";
+    (code == 0 ? read : refused)++;
+    EXPECT_EQ(exists(out), code == 0) << "seed " << seed;
+    EXPECT_FALSE(exists(out + ".partial")) << "seed " << seed;
+    std::remove(out.c_str());
+  }
+  std::printf("seeded corruptions: %d read whole, %d refused with one line\n", read, refused);
+  std::remove(in.c_str());
+  ::rmdir(dir.c_str());
 }
 
 }  // namespace

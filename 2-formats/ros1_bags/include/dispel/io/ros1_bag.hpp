@@ -15,7 +15,10 @@ enum class BagCompression { kNone, kBz2, kLz4 };
 
 class Ros1BagReader final : public RecordingReader {
  public:
-  /// Opens @p path. @throws InputError "<path>: not a readable ROS 1 bag (...)"
+  /// Opens @p path, its record structure checked first (lengths, offsets, index; see
+  /// src/bag_check.hpp): the bag library trusts them and crashed on a corrupt one.
+  /// @throws InputError "<path>: corrupt bag: record at byte N: ...",
+  ///         "<path>: not a readable ROS 1 bag (...)"
   explicit Ros1BagReader(const std::string& path);
   ~Ros1BagReader() override;
 

@@ -233,6 +233,33 @@ double incidence_cosine(const World& world, std::int32_t id, const Eigen::Vector
   return std::max(0.1, std::abs(normal.dot(direction)) / norm);
 }
 
+// The simulator holds the whole run in memory before it is written: per scan its ranges, truth
+// and actor per beam, per sensor sample one SensorSample. A run that would hold more than
+// kMaxHeldRunBytes is refused before any work, naming @p field (the scenario's duration or the
+// command line's --duration) and the longest duration that fits.
+constexpr double kMaxHeldRunBytes = 4.0 * 1024 * 1024 * 1024;
+
+void check_run_size(const Scenario& s, double duration_s, const std::string& field) {
+  if (!(duration_s > 0.0 && std::isfinite(duration_s))) reject(field, duration_s, "finite and > 0");
+  const double beams = static_cast<double>(lidar_geometry(s.lidar).beam_count);
+  const double per_scan =
+      beams * static_cast<double>(sizeof(float) + sizeof(Truth) + sizeof(std::int32_t)) +
+      static_cast<double>(sizeof(ScanFrame));
+  const double per_second =
+      s.lidar.rate_hz * per_scan + s.sensors.rate_hz * static_cast<double>(sizeof(SensorSample));
+  const double longest = kMaxHeldRunBytes / per_second;
+  if (duration_s > longest) {
+    std::ostringstream rule;
+    rule << "at most " << static_cast<long long>(std::floor(longest))
+         << " s for this scanner and rates (the run is held in memory, at most 4 GiB)";
+    reject(field, duration_s, rule.str().c_str());
+  }
+  // A bag's stamps are 32-bit seconds.
+  if (!(s.start_time_s + duration_s < 4294967295.0)) {
+    reject("start_time_s", s.start_time_s, "such that start_time_s + duration_s < 2^32 s");
+  }
+}
+
 }  // namespace
 
 void Scenario::validate() const {
@@ -289,10 +316,11 @@ void Scenario::validate() const {
     reject("sensors.rate_hz", sensors.rate_hz, "in (0, 100]");
   if (robot.lawnmower) {
     const Lawnmower& l = *robot.lawnmower;
-    if (l.lanes < 1) reject("robot.lawnmower.lanes", l.lanes, ">= 1");
-    if (!(l.lane_length_m > 0.0)) reject("robot.lawnmower.lane_length_m", l.lane_length_m, "> 0");
-    if (!(l.lane_spacing_m > 0.0))
-      reject("robot.lawnmower.lane_spacing_m", l.lane_spacing_m, "> 0");
+    if (l.lanes < 1 || l.lanes > 10000) reject("robot.lawnmower.lanes", l.lanes, "in [1, 10000]");
+    if (!(l.lane_length_m > 0.0 && l.lane_length_m <= 10000.0))
+      reject("robot.lawnmower.lane_length_m", l.lane_length_m, "in (0, 10000]");
+    if (!(l.lane_spacing_m > 0.0 && l.lane_spacing_m <= 1000.0))
+      reject("robot.lawnmower.lane_spacing_m", l.lane_spacing_m, "in (0, 1000]");
   }
   for (std::size_t i = 0; i < actors.size(); ++i) {
     const Actor& a = actors[i];
@@ -302,7 +330,31 @@ void Scenario::validate() const {
       reject(field + ".speed_mps", a.speed_mps, "in [0, 10]");
     if (!(a.pause_s >= 0.0)) reject(field + ".pause_s", a.pause_s, ">= 0");
   }
+  // Bounds on what the run is made of: each person is ray-cast for every beam of every scan,
+  // each waypoint and lane is held in memory.
+  constexpr double kMaxPeople = 10000, kMaxWaypoints = 100000;
+  if (static_cast<double>(actors.size()) > kMaxPeople) {
+    reject("actors", static_cast<double>(actors.size()), "at most 10000 actors");
+  }
+  for (std::size_t i = 0; i < actors.size(); ++i) {
+    if (static_cast<double>(actors[i].waypoints.size()) > kMaxWaypoints) {
+      reject("actors[" + std::to_string(i) + "].waypoints",
+             static_cast<double>(actors[i].waypoints.size()), "at most 100000 waypoints");
+    }
+  }
+  if (static_cast<double>(robot.waypoints.size()) > kMaxWaypoints) {
+    reject("robot.waypoints", static_cast<double>(robot.waypoints.size()),
+           "at most 100000 waypoints");
+  }
   if (random_people.count < 0) reject("random_people.count", random_people.count, ">= 0");
+  if (random_people.count > kMaxPeople)
+    reject("random_people.count", random_people.count, "at most 10000");
+  if (random_people.waypoints < 0 || random_people.waypoints > kMaxWaypoints)
+    reject("random_people.waypoints", random_people.waypoints, "in [0, 100000]");
+  if (static_cast<double>(actors.size()) + random_people.count > kMaxPeople) {
+    reject("random_people.count", random_people.count, "at most 10000 people with the actors");
+  }
+  check_run_size(*this, duration_s, "duration_s");
   if (random_people.count > 0 &&
       !(random_people.area_max.array() > random_people.area_min.array()).all()) {
     throw std::invalid_argument("random_people.area must have max > min in x and y");
@@ -333,6 +385,7 @@ std::vector<Segment> rectangle_edges(const Rectangle& r) {
 SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double duration_s) {
   scenario.validate();
   const double duration = duration_s > 0.0 ? duration_s : scenario.duration_s;
+  if (duration_s > 0.0) check_run_size(scenario, duration, "--duration");
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> n01(0.0, 1.0);
   std::uniform_real_distribution<double> u01(0.0, 1.0);

@@ -479,9 +479,9 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
       }
     }
   }
-  const double moved = (obs.points[kCentroid] - track.marked_at).norm();
   const double elapsed = stamp_s - track.marked_s;
   if (track.free_space_pending && elapsed >= kFreeSpaceDecision_s) {
+    const double moved = (obs.points[kCentroid] - track.marked_at).norm();
     // Decided once, when the object has had time to move (see kFreeSpaceDecision_s): confirmed
     // when it has moved as a walker can, or it is beside a track that has; else refuted.
     track.free_space_pending = false;

@@ -76,21 +76,26 @@ Recorded sample(int k) {
 
 class BagRoundTrip : public ::testing::TestWithParam<rosbag::compression::CompressionType> {};
 
+// Writes samples 0..n-1 of every topic, the first TF on /tf_static.
+void write_samples(rosbag::Bag& bag, int n) {
+  for (int k = 0; k < n; ++k) {
+    const Recorded r = sample(k);
+    const ros::Time t = r.scan.header.stamp;
+    bag.write("/scan", t, r.scan);
+    bag.write("/odom", t, r.odom);
+    bag.write("/imu", t, r.imu);
+    bag.write("/wheels", t, r.wheels);
+    bag.write(k == 0 ? "/tf_static" : "/tf", t, r.tf);
+  }
+}
+
 TEST_P(BagRoundTrip, EveryMessageComesBackUnchanged) {
   const std::string path =
       ::testing::TempDir() + "/round_trip_" + std::to_string(static_cast<int>(GetParam())) + ".bag";
   {
     rosbag::Bag bag(path, rosbag::bagmode::Write);
     bag.setCompression(GetParam());
-    for (int k = 0; k < 50; ++k) {
-      const Recorded r = sample(k);
-      const ros::Time t = r.scan.header.stamp;
-      bag.write("/scan", t, r.scan);
-      bag.write("/odom", t, r.odom);
-      bag.write("/imu", t, r.imu);
-      bag.write("/wheels", t, r.wheels);
-      bag.write(k == 0 ? "/tf_static" : "/tf", t, r.tf);
-    }
+    write_samples(bag, 50);
   }
   rosbag::Bag bag(path, rosbag::bagmode::Read);
   rosbag::View view(bag);
@@ -334,15 +339,7 @@ std::string small_bag(rosbag::compression::CompressionType compression) {
     rosbag::Bag bag(path, rosbag::bagmode::Write);
     bag.setCompression(compression);
     bag.setChunkThreshold(20000);
-    for (int k = 0; k < 40; ++k) {
-      const Recorded r = sample(k);
-      const ros::Time t = r.scan.header.stamp;
-      bag.write("/scan", t, r.scan);
-      bag.write("/odom", t, r.odom);
-      bag.write("/imu", t, r.imu);
-      bag.write("/wheels", t, r.wheels);
-      bag.write(k == 0 ? "/tf_static" : "/tf", t, r.tf);
-    }
+    write_samples(bag, 40);
   }
   std::string bytes = slurp(path);
   std::remove(path.c_str());

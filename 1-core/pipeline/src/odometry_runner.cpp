@@ -1,5 +1,6 @@
 #include "dispel/pipeline/odometry_runner.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -8,7 +9,7 @@
 namespace dispel::pipeline {
 namespace {
 
-constexpr double kNegInf = -std::numeric_limits<double>::infinity();
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 double checked_window(double window_s) {
   if (std::isnan(window_s) || window_s < 0.0) {
@@ -35,9 +36,12 @@ OdometryRunner::OdometryRunner(const OdometryConfig& config, double reorder_wind
                                OdometryEngine engine)
     : engine_(engine),
       window_s_(checked_window(reorder_window_s)),
-      newest_s_(kNegInf),
-      last_given_s_(kNegInf),
-      last_arrival_s_{kNegInf, kNegInf} {
+      newest_s_(-kInf),
+      last_given_s_(-kInf),
+      latest_s_{-kInf, -kInf},
+      waiting_{true, engine == OdometryEngine::kFusion},
+      last_arrival_s_{-kInf, -kInf},
+      pending_since_s_(-kInf) {
   if (engine_ == OdometryEngine::kFusion) {
     fusion_.emplace(config);
   } else {
@@ -55,18 +59,30 @@ void OdometryRunner::add_imu(double t_s, double yaw_rate_radps) {
 }
 
 void OdometryRunner::add(double t_s, int source, double a, double b) {
+  const auto k = static_cast<std::size_t>(source);
+  OdometryArrivals& arr = arrivals_[k];
+  ++arr.count;
   if (std::isfinite(t_s)) {
-    if (t_s < last_arrival_s_[source]) ++arrived_out_of_order_;
-    last_arrival_s_[source] = t_s;
+    if (t_s < latest_s_[k]) {
+      ++arr.out_of_order;
+      arr.largest_lag_in_source_s = std::max(arr.largest_lag_in_source_s, latest_s_[k] - t_s);
+    }
+    if (t_s < newest_s_) arr.largest_lag_s = std::max(arr.largest_lag_s, newest_s_ - t_s);
+    latest_s_[k] = std::max(latest_s_[k], t_s);
+    newest_s_ = std::max(newest_s_, t_s);
   }
   if (source == 1 && engine_ == OdometryEngine::kDeadReckoning) return;  // The wheels alone.
+  if (!arrived_since_release_[0] && !arrived_since_release_[1]) {
+    empty_before_arrivals_ = buffer_.empty();
+  }
+  arrived_since_release_[k] = true;
   const Measurement m{t_s, source, next_seq_++, a, b};
   if (!std::isfinite(t_s)) {
     fuse(m);  // Counted as rejected; never buffered (a NaN key has no place in the order).
     return;
   }
+  waiting_[k] = true;
   buffer_.push(m);
-  if (t_s > newest_s_) newest_s_ = t_s;
 }
 
 OdometryEvent OdometryRunner::fuse(const Measurement& m) {
@@ -74,9 +90,18 @@ OdometryEvent OdometryRunner::fuse(const Measurement& m) {
   return m.source == 1 ? fusion_->add_imu(m.t_s, m.a) : fusion_->add_wheels(m.t_s, m.a, m.b);
 }
 
+double OdometryRunner::horizon() const {
+  if (window_s_ == kInf) return -kInf;  // Nothing before a flush.
+  double slowest = kInf;                // No source waited for: everything.
+  for (std::size_t k = 0; k < kSources; ++k) {
+    if (waiting_[k]) slowest = std::min(slowest, latest_s_[k]);
+  }
+  return slowest - window_s_;
+}
+
 std::vector<OdometryEstimate> OdometryRunner::release(bool flush) {
   std::vector<OdometryEstimate> out;
-  const double until = newest_s_ - window_s_;
+  const double until = horizon();
   while (!buffer_.empty() && (flush || buffer_.top().t_s <= until)) {
     const Measurement m = buffer_.top();
     buffer_.pop();
@@ -92,11 +117,44 @@ std::vector<OdometryEstimate> OdometryRunner::release(bool flush) {
   return out;
 }
 
+std::vector<OdometryEstimate> OdometryRunner::release_at(double now_s, double source_timeout_s) {
+  if (std::isnan(source_timeout_s) || source_timeout_s < 0.0) {
+    throw std::invalid_argument("source_timeout_s must be a number >= 0, got " +
+                                std::to_string(source_timeout_s));
+  }
+  for (std::size_t k = 0; k < kSources; ++k) {
+    if (arrived_since_release_[k]) last_arrival_s_[k] = now_s;
+  }
+  if ((arrived_since_release_[0] || arrived_since_release_[1]) && empty_before_arrivals_) {
+    pending_since_s_ = now_s;
+  }
+  arrived_since_release_ = {false, false};
+  if (!buffer_.empty()) {
+    for (std::size_t k = 0; k < kSources; ++k) {
+      // Quiet since its last measurement, or since measurements began to wait for it.
+      const double quiet_since = std::max(last_arrival_s_[k], pending_since_s_);
+      if (waiting_[k] && now_s - quiet_since >= source_timeout_s) {
+        waiting_[k] = false;
+        ++quiet_count_[k];
+      }
+    }
+  }
+  return release(false);
+}
+
+void OdometryRunner::stop_waiting_for(OdometrySource source) { waiting_[index(source)] = false; }
+
 OdometryCounters OdometryRunner::counters() const {
   if (fusion_) return fusion_->counters();
   OdometryCounters c;
   c.wheels = wheels_only_->counters();
   return c;
+}
+
+std::int64_t OdometryRunner::late(OdometrySource source) const {
+  const OdometryCounters c = counters();
+  const auto& counts = source == OdometrySource::kWheels ? c.wheels : c.imu;
+  return counts[static_cast<std::size_t>(OdometryEvent::kRejectedOutOfOrder)];
 }
 
 OdometryEstimate OdometryRunner::estimate() const {

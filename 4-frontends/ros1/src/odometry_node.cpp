@@ -11,8 +11,10 @@
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <string>
 
@@ -31,7 +33,8 @@ struct OdometryNodeSettings {
   std::string odom_frame = "odom";
   std::string base_frame = "base_link";
   bool publish_tf = false;
-  double reorder_window_s = 0.1;
+  double reorder_window_s = 0.05;
+  double source_timeout_s = 0.5;
   int queue_size = 100;
   double diagnostics_period_s = 1.0;
   io::OdometrySettings odometry;
@@ -55,6 +58,9 @@ OdometryNodeSettings read_settings(const std::string& node_name) {
   s.reorder_window_s = p.number("reorder_window_s", s.reorder_window_s);
   p.require(std::isfinite(s.reorder_window_s) && s.reorder_window_s >= 0.0, "reorder_window_s",
             "a finite number >= 0", s.reorder_window_s);
+  s.source_timeout_s = p.number("source_timeout_s", s.source_timeout_s);
+  p.require(std::isfinite(s.source_timeout_s) && s.source_timeout_s > 0.0, "source_timeout_s",
+            "a finite number > 0", s.source_timeout_s);
   s.queue_size = p.integer("queue_size", s.queue_size);
   p.require(s.queue_size >= 1, "queue_size", "an integer >= 1", s.queue_size);
   s.diagnostics_period_s = p.number("diagnostics_period_s", s.diagnostics_period_s);
@@ -73,6 +79,12 @@ OdometryNodeSettings read_settings(const std::string& node_name) {
   return s;
 }
 
+std::string seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4f", s);
+  return buf;
+}
+
 class OdometryNode {
  public:
   OdometryNode(ros::NodeHandle& nh, OdometryNodeSettings settings)
@@ -87,12 +99,11 @@ class OdometryNode {
     odom_pub_ = nh.advertise<nav_msgs::Odometry>("odometry/filtered", queue);
     diagnostics_pub_ = nh.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 2);
     if (settings_.publish_tf) broadcaster_.emplace();
-    // Measurements still waiting when nothing new comes (the end of a recording, a stalled
-    // sensor) are fused after reorder_window_s, at least 50 ms, of silence.
-    const double idle_s = std::max(settings_.reorder_window_s, 0.05);
-    flush_timer_ = nh.createSteadyTimer(ros::WallDuration(idle_s / 2.0), [this, idle_s](auto&) {
-      if (runner_.pending() > 0 && seconds_since(last_arrival_) >= idle_s) publish(true);
-    });
+    // Measurements wait for every source; one that has been quiet for source_timeout_s (a stalled
+    // sensor, the end of a recording) is no longer waited for: checked four times per timeout.
+    quiet_timer_ =
+        nh.createSteadyTimer(ros::WallDuration(std::max(settings_.source_timeout_s / 4.0, 0.001)),
+                             [this](auto&) { publish(); });
     diagnostics_timer_ = nh.createSteadyTimer(ros::WallDuration(settings_.diagnostics_period_s),
                                               &OdometryNode::publish_diagnostics, this);
     ROS_INFO("dispel odometry (%s): %s (%s) + %s -> %s%s",
@@ -105,9 +116,9 @@ class OdometryNode {
   }
 
  private:
-  using Clock = std::chrono::steady_clock;
-  static double seconds_since(Clock::time_point t) {
-    return std::chrono::duration<double>(Clock::now() - t).count();
+  static double now_s() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
   }
 
   void on_joint_state(const sensor_msgs::JointState::ConstPtr& msg) {
@@ -120,7 +131,7 @@ class OdometryNode {
       return;
     }
     runner_.add_wheels(w->t_s, w->left_mps, w->right_mps);
-    arrived();
+    publish();
   }
 
   void on_wheel_odometry(const nav_msgs::Odometry::ConstPtr& msg) {
@@ -128,23 +139,20 @@ class OdometryNode {
         io::wheel_speeds(io::to_message(*msg), settings_.odometry.filter.track_width_m,
                          io::to_stamp(ros::Time::now()));
     runner_.add_wheels(w.t_s, w.left_mps, w.right_mps);
-    arrived();
+    publish();
   }
 
   void on_imu(const sensor_msgs::Imu::ConstPtr& msg) {
     const io::ImuMessage imu = io::to_message(*msg);
     runner_.add_imu(io::stamp_or(imu.header.stamp, io::to_stamp(ros::Time::now())),
                     io::yaw_rate(imu, settings_.odometry));
-    arrived();
+    publish();
   }
 
-  void arrived() {
-    last_arrival_ = Clock::now();
-    publish(false);
-  }
-
-  void publish(bool flush) {
-    for (const OdometryEstimate& e : runner_.release(flush)) {
+  void publish() {
+    const std::array<bool, 2> waited = {runner_.waiting_for(pipeline::OdometrySource::kWheels),
+                                        runner_.waiting_for(pipeline::OdometrySource::kImu)};
+    for (const OdometryEstimate& e : runner_.release_at(now_s(), settings_.source_timeout_s)) {
       odom_pub_.publish(odometry_message(e, settings_.odom_frame, settings_.base_frame));
       if (broadcaster_) {
         broadcaster_->sendTransform(
@@ -152,12 +160,43 @@ class OdometryNode {
       }
       ++published_;
     }
+    // One throttled warning per source (a macro's throttle is per place in the code).
+    if (waited[0] && !runner_.waiting_for(pipeline::OdometrySource::kWheels)) {
+      ROS_WARN_THROTTLE(5.0, "%s", quiet_message("wheel", wheels_sub_.getTopic()).c_str());
+    }
+    if (waited[1] && !runner_.waiting_for(pipeline::OdometrySource::kImu)) {
+      ROS_WARN_THROTTLE(5.0, "%s", quiet_message("IMU", imu_sub_.getTopic()).c_str());
+    }
+    const std::int64_t late = runner_.late(pipeline::OdometrySource::kWheels) +
+                              runner_.late(pipeline::OdometrySource::kImu);
+    if (late > late_warned_) {
+      ROS_WARN_THROTTLE(5.0,
+                        "dispel odometry: %lld wheel and %lld IMU measurements so far arrived "
+                        "later than reorder_window_s (%g s) and source_timeout_s (%g s) allow: "
+                        "older than a measurement already fused, refused",
+                        static_cast<long long>(runner_.late(pipeline::OdometrySource::kWheels)),
+                        static_cast<long long>(runner_.late(pipeline::OdometrySource::kImu)),
+                        settings_.reorder_window_s, settings_.source_timeout_s);
+      late_warned_ = late;
+    }
+  }
+
+  std::string quiet_message(const char* what, const std::string& topic) const {
+    return std::string("dispel odometry: no ") + what + " measurement on " + topic + " for " +
+           seconds(settings_.source_timeout_s) +
+           " s (source_timeout_s) while measurements wait for it: fusing without it until it "
+           "comes back";
   }
 
   void publish_diagnostics(const ros::SteadyTimerEvent&) {
     const OdometryCounters c = runner_.counters();
     const auto count = [](const auto& counts, OdometryEvent e) {
       return std::to_string(counts[static_cast<std::size_t>(e)]);
+    };
+    const pipeline::OdometryArrivals& aw = runner_.arrivals(pipeline::OdometrySource::kWheels);
+    const pipeline::OdometryArrivals& ai = runner_.arrivals(pipeline::OdometrySource::kImu);
+    const auto quiet = [this](pipeline::OdometrySource s) {
+      return std::to_string(runner_.quiet_count(s));
     };
     const std::int64_t refused = c.count(OdometryEvent::kRejectedNonFinite) +
                                  c.count(OdometryEvent::kRejectedOutOfOrder) +
@@ -170,18 +209,29 @@ class OdometryNode {
                                     : diagnostic_msgs::DiagnosticStatus::OK,
         std::to_string(published_) + " estimates published",
         {{"model", odometry_model_name(settings_.odometry.filter.model)},
+         {"estimates published", std::to_string(published_)},
+         {"wheels received", std::to_string(aw.count)},
+         {"imu received", std::to_string(ai.count)},
          {"wheels accepted", count(c.wheels, OdometryEvent::kAccepted)},
          {"wheels gated", count(c.wheels, OdometryEvent::kGated)},
          {"wheels gate overridden", count(c.wheels, OdometryEvent::kGateOverridden)},
-         {"wheels out of order", count(c.wheels, OdometryEvent::kRejectedOutOfOrder)},
+         {"wheels late", count(c.wheels, OdometryEvent::kRejectedOutOfOrder)},
          {"wheels not finite", count(c.wheels, OdometryEvent::kRejectedNonFinite)},
          {"wheel messages without both wheels", std::to_string(malformed_)},
          {"imu accepted", count(c.imu, OdometryEvent::kAccepted)},
          {"imu gated", count(c.imu, OdometryEvent::kGated)},
-         {"imu out of order", count(c.imu, OdometryEvent::kRejectedOutOfOrder)},
+         {"imu late", count(c.imu, OdometryEvent::kRejectedOutOfOrder)},
          {"imu not finite", count(c.imu, OdometryEvent::kRejectedNonFinite)},
          {"numerical failures", std::to_string(c.count(OdometryEvent::kNumericalFailure))},
-         {"waiting for reordering", std::to_string(runner_.pending())}}));
+         {"waiting for reordering", std::to_string(runner_.pending())},
+         {"wheels arrived out of order", std::to_string(aw.out_of_order)},
+         {"imu arrived out of order", std::to_string(ai.out_of_order)},
+         {"wheels largest lag in source (s)", seconds(aw.largest_lag_in_source_s)},
+         {"imu largest lag in source (s)", seconds(ai.largest_lag_in_source_s)},
+         {"wheels largest lag behind newest (s)", seconds(aw.largest_lag_s)},
+         {"imu largest lag behind newest (s)", seconds(ai.largest_lag_s)},
+         {"wheels given up as quiet", quiet(pipeline::OdometrySource::kWheels)},
+         {"imu given up as quiet", quiet(pipeline::OdometrySource::kImu)}}));
     refused_reported_ = refused;
     diagnostics_pub_.publish(array);
   }
@@ -191,9 +241,9 @@ class OdometryNode {
   ros::Subscriber wheels_sub_, imu_sub_;
   ros::Publisher odom_pub_, diagnostics_pub_;
   std::optional<tf2_ros::TransformBroadcaster> broadcaster_;
-  ros::SteadyTimer flush_timer_, diagnostics_timer_;
-  Clock::time_point last_arrival_ = Clock::now();
+  ros::SteadyTimer quiet_timer_, diagnostics_timer_;
   std::int64_t malformed_ = 0;
+  std::int64_t late_warned_ = 0;
   std::int64_t published_ = 0;
   std::int64_t refused_reported_ = 0;
 };

@@ -10,9 +10,12 @@ import os
 import subprocess
 import time
 
-from roslive import Failure, RosSession, check, env, read_topics, run
+from roslive import DRAIN_S, Failure, RosSession, check, env, read_topics, run
 
 ROSLAUNCH = ["/usr/bin/python3", "/usr/bin/roslaunch"]
+# Ten times the node's work per scan here (0.1 s waiting for a transform), five times the longest
+# stall measured on a loaded machine (0.2 s, docs/ros1.md).
+SETTLED_S = 1.0
 
 
 def node_refuses(ros, name, args, expected):
@@ -58,9 +61,17 @@ def main():
                          "/dispel_odometry/odometry/model": "ct",
                          "/dispel_odometry/wheel_message": "joint_state"}, "parameters differ")
         # Scans go through (unfiltered: nobody publishes odom -> laser here, and they are counted).
-        recorder = ros.record("record", out_bag, ["/scan_filtered", "/scan_labels"])
-        ros.play("play", leg_bag, ["-u", "3"], timeout=60)
-        time.sleep(1.0)
+        topics = ["/scan_filtered", "/scan_labels"]
+        recorder = ros.record("record", out_bag, topics)
+        ros.wait_for(lambda: all((t, "/record") in ros.connections("/dispel_filter")
+                                 for t in topics), 30,
+                     "the filter node did not connect to the recorder")
+        ros.play("play", leg_bag, ["-u", "3"], timeout=60, connected={"/scan": ["/dispel_filter"]})
+        # The node waits transform_timeout_s (0.1 s) for each scan's pose, which never comes: all
+        # scans are out when it has published nothing for SETTLED_S; then DRAIN_S for the
+        # recorder to take what it received off its callback queue (roslive.DRAIN_S).
+        ros.wait_delivered("/dispel_filter", "/record", topics, SETTLED_S, 60)
+        time.sleep(DRAIN_S)
         ros.stop_recording(recorder, out_bag)
         out = read_topics(out_bag)
         n = len(out.get("/scan_filtered", []))
@@ -115,6 +126,9 @@ def main():
         node_refuses(ros, "odometry_window", [odometry_node, "__name:=o2",
                                               "_reorder_window_s:=-1"],
                      "/o2/reorder_window_s must be a finite number >= 0, got -1")
+        node_refuses(ros, "odometry_timeout", [odometry_node, "__name:=o4",
+                                               "_source_timeout_s:=0"],
+                     "/o4/source_timeout_s must be a finite number > 0, got 0")
         node_refuses(ros, "odometry_track", [odometry_node, "__name:=o3",
                                              "_odometry/track_width_m:=0"],
                      "odometry.track_width_m must be")

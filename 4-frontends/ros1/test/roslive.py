@@ -9,7 +9,9 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
+import xmlrpc.client
 
 import rosbag
 import rosgraph
@@ -17,6 +19,11 @@ import rosgraph
 PLAY = "/usr/lib/rosbag/play"
 RECORD = "/usr/lib/rosbag/record"
 STATIC_TF = "/usr/lib/tf2_ros/static_transform_publisher"
+# rosbag record drops what is still on its callback queue when it is stopped: once it has
+# received everything (RosSession.received), a test gives it this long before stopping it. Its 10
+# threads take a message off the queue in microseconds; a loaded machine stalled a process for up
+# to 0.2 s (docs/ros1.md, the odometry node's measurements).
+DRAIN_S = 1.0
 
 
 def env(name):
@@ -148,6 +155,48 @@ class RosSession:
         nodes = pubs.get(topic, [])
         return bool(nodes) if node is None else any(n.startswith(node) for n in nodes)
 
+    def connections(self, node):
+        """The (topic, peer node) pairs of the connections a node has made, by its getBusInfo."""
+        try:
+            uri = self.master.lookupNode(node)
+            _, _, info = xmlrpc.client.ServerProxy(uri).getBusInfo("/dispel_live_test")
+        except Exception:
+            return set()
+        return {(c[4], c[1]) for c in info if c[5]}
+
+    def _bus_stats(self, node):
+        """[publications, subscriptions] of a roscpp node's getBusStats (which, unlike the other
+        calls, answers without a status code and message)."""
+        try:
+            uri = self.master.lookupNode(node)
+            return xmlrpc.client.ServerProxy(uri).getBusStats("/dispel_live_test")[:2]
+        except Exception:
+            return [[], []]
+
+    def sent(self, node, topic):
+        """Messages a (roscpp) node has sent on a topic, over all its connections."""
+        return sum(c[3] for t, conns in self._bus_stats(node)[0] if t == topic for c in conns)
+
+    def received(self, node, topic):
+        """Messages a (roscpp) node has received on a topic, over all its connections."""
+        return sum(c[2] for t, conns in self._bus_stats(node)[1] if t == topic for c in conns)
+
+    def wait_delivered(self, publisher, subscriber, topics, settled_s, timeout):
+        """Waits until the subscriber has received every message the publisher sent on each topic
+        and the publisher has sent nothing more for settled_s."""
+        last, since = None, time.time()
+        end = time.time() + timeout
+        while time.time() < end:
+            sent = [self.sent(publisher, t) for t in topics]
+            if sent != last:
+                last, since = sent, time.time()
+            elif (time.time() - since >= settled_s and
+                  sent == [self.received(subscriber, t) for t in topics]):
+                return sent
+            time.sleep(0.1)
+        raise Failure("%s did not receive what %s sent on %s in %d s" %
+                      (subscriber, publisher, topics, timeout))
+
     def record(self, name, output, topics):
         """Starts rosbag record and waits until it subscribes to every topic."""
         p = self.start(name, [RECORD, "-O", output, "--tcpnodelay", "__name:=" + name] + topics)
@@ -155,9 +204,23 @@ class RosSession:
                       "rosbag record did not subscribe to %s" % topics)
         return p
 
-    def play(self, name, bag, args, timeout):
-        """Plays a bag with rosbag play and waits for it to end."""
-        p = self.start(name, [PLAY, "-q", "--wait-for-subscribers", "-d", "0.5", bag] + args)
+    def play(self, name, bag, args, timeout, connected=None):
+        """Plays a bag with rosbag play and waits for it to end. With connected ({topic: [node]}),
+        the player starts paused and is let go (a space on its standard input) only when it has a
+        connection to each of those nodes on each topic: --wait-for-subscribers waits for the
+        first subscriber of a topic only, and a second one still connecting would miss the first
+        messages (how long a connection takes depends on the machine's load)."""
+        if connected:
+            p = self.start(name, [PLAY, "-q", "--pause", bag, "__name:=" + name] + args)
+            wanted = {(t, n) for t, nodes in connected.items() for n in nodes}
+            self.wait_for(lambda: p.poll() is not None or
+                          wanted <= self.connections("/" + name), 30,
+                          "rosbag play did not connect to %s: it has %s" %
+                          (sorted(wanted), sorted(self.connections("/" + name))))
+            p.stdin.write(b" ")
+            p.stdin.flush()
+        else:
+            p = self.start(name, [PLAY, "-q", "--wait-for-subscribers", "-d", "0.5", bag] + args)
         try:
             code = p.wait(timeout)
         except subprocess.TimeoutExpired:
@@ -167,6 +230,57 @@ class RosSession:
     def stop_recording(self, p, output):
         code = self.stop(p, 30)
         check(os.path.exists(output), "rosbag record wrote no %s (exit %s)" % (output, code))
+
+
+class Listener:
+    """Subscribes from the test's own process (rospy) and keeps every message of the topics, as
+    rosbag record would, but can be asked what it has received: a test waits until the messages
+    it expects are there instead of sleeping for a guessed time before stopping a recorder. One
+    per process (rospy has one node per process), on the master of the session it is given."""
+
+    def __init__(self, session, topics):
+        import rospy
+        os.environ.update({k: session.env[k] for k in ("ROS_HOME", "ROS_LOG_DIR")})
+        rospy.init_node("dispel_live_test", anonymous=True, disable_signals=True)
+        self.rospy = rospy
+        self.lock = threading.Lock()
+        self.raw = {t: [] for t in topics}
+        self.classes = {}
+        # AnyMsg: kept serialised while the test runs, decoded when asked for with the message
+        # definition its publisher sent (as rosbag does: Debian packages no Python module for
+        # nav_msgs or diagnostic_msgs).
+        self.subscribers = {t: rospy.Subscriber(t, rospy.AnyMsg, self._received, callback_args=t,
+                                                tcp_nodelay=True) for t in topics}
+
+    def _received(self, msg, topic):
+        with self.lock:
+            self.raw[topic].append((msg._buff, msg._connection_header))
+
+    def connected(self, topic, publishers=1):
+        return self.subscribers[topic].get_num_connections() >= publishers
+
+    def count(self, topic):
+        with self.lock:
+            return len(self.raw[topic])
+
+    def messages(self, topic):
+        """The messages received on a topic so far, decoded, in the order received."""
+        import genpy.dynamic
+        with self.lock:
+            raw = list(self.raw[topic])
+        out = []
+        for buff, header in raw:
+            name = header["type"]
+            if name not in self.classes:
+                self.classes[name] = genpy.dynamic.generate_dynamic(
+                    name, header["message_definition"])[name]
+            out.append(self.classes[name]().deserialize(buff))
+        return out
+
+    def close(self):
+        for s in self.subscribers.values():
+            s.unregister()
+        self.rospy.signal_shutdown("the test is done")
 
 
 def read_topics(path, topics=None):

@@ -123,7 +123,12 @@ std::vector<OdometryEstimate> OdometryRunner::release_at(double now_s, double so
                                 std::to_string(source_timeout_s));
   }
   for (std::size_t k = 0; k < kSources; ++k) {
-    if (arrived_since_release_[k]) last_arrival_s_[k] = now_s;
+    if (!arrived_since_release_[k]) continue;
+    if (!empty_before_arrivals_ && std::isfinite(last_arrival_s_[k])) {
+      const double gap = now_s - std::max(last_arrival_s_[k], pending_since_s_);
+      arrivals_[k].longest_gap_s = std::max(arrivals_[k].longest_gap_s, gap);
+    }
+    last_arrival_s_[k] = now_s;
   }
   if ((arrived_since_release_[0] || arrived_since_release_[1]) && empty_before_arrivals_) {
     pending_since_s_ = now_s;

@@ -246,6 +246,7 @@ TEST(OdometryRunner, AQuietSourceIsNoLongerWaitedForAfterTheTimeout) {
   EXPECT_FALSE(runner.waiting_for(kImu));
   EXPECT_TRUE(runner.waiting_for(kWheels));
   EXPECT_EQ(runner.quiet_count(kImu), 1);
+  EXPECT_NEAR(runner.arrivals(kWheels).longest_gap_s, 0.01, 1e-9);  // One per release_at().
   ASSERT_FALSE(out.empty());
   EXPECT_NEAR(out.back().t_s, 1.8, 1e-9);  // Up to the newest wheels minus the window.
   // The IMU comes back: waited for again; its measurements are fused in order.
@@ -253,6 +254,8 @@ TEST(OdometryRunner, AQuietSourceIsNoLongerWaitedForAfterTheTimeout) {
   feed(2.02, true);
   EXPECT_TRUE(runner.waiting_for(kImu));
   feed(2.0, false);
+  EXPECT_NEAR(runner.arrivals(kWheels).longest_gap_s, 0.31, 1e-9);  // 100.19 to 100.5.
+  EXPECT_EQ(runner.arrivals(kImu).longest_gap_s, 0.0);              // It had never come before.
   feed(2.1, false);
   feed(2.15, true);
   feed(2.2, false);

@@ -230,6 +230,8 @@ class OdometryNode {
          {"imu largest lag in source (s)", seconds(ai.largest_lag_in_source_s)},
          {"wheels largest lag behind newest (s)", seconds(aw.largest_lag_s)},
          {"imu largest lag behind newest (s)", seconds(ai.largest_lag_s)},
+         {"wheels longest gap (s)", seconds(aw.longest_gap_s)},
+         {"imu longest gap (s)", seconds(ai.longest_gap_s)},
          {"wheels given up as quiet", quiet(pipeline::OdometrySource::kWheels)},
          {"imu given up as quiet", quiet(pipeline::OdometrySource::kImu)}}));
     refused_reported_ = refused;

@@ -48,6 +48,10 @@ struct OdometryArrivals {
   /// The largest amount by which it was earlier than the latest stamp of any source: what a
   /// window measured from the newest stamp alone would have to cover.
   double largest_lag_s = 0.0;
+  /// The longest time on release_at()'s arrival clock between two measurements of the source
+  /// (or since measurements began to wait) while measurements waited: what source_timeout_s has
+  /// to exceed (the gap of a source given up as quiet counts when it comes back).
+  double longest_gap_s = 0.0;
 };
 
 class OdometryRunner {

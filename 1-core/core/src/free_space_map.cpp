@@ -46,6 +46,7 @@ FreeSpaceMap::FreeSpaceMap(FreeSpaceConfig config) : config_(config) {
   const auto cells_per_side =
       static_cast<std::int64_t>(std::ceil(config_.extent_m / config_.cell_size_m));
   tiles_per_side_ = (cells_per_side + kTileSide - 1) / kTileSide;
+  if ((tiles_per_side_ & (tiles_per_side_ - 1)) == 0) slot_mask_ = tiles_per_side_ - 1;
   reach_cells_ = std::max<std::int64_t>(0, tiles_per_side_ * kTileSide / 2 - kTileSide);
   const auto slots = static_cast<std::size_t>(tiles_per_side_ * tiles_per_side_);
   // Not value-initialised: a slot's cells are written when its tile is started, and the pages of
@@ -61,16 +62,6 @@ void FreeSpaceMap::clear() {
     std::fill(tags_.begin(), tags_.end(), TileTag{0, 0, 0});
     generation_ = 1;
   }
-}
-
-std::size_t FreeSpaceMap::slot_of(std::int64_t tx, std::int64_t ty) const {
-  const std::int64_t sx = ((tx % tiles_per_side_) + tiles_per_side_) % tiles_per_side_;
-  const std::int64_t sy = ((ty % tiles_per_side_) + tiles_per_side_) % tiles_per_side_;
-  return static_cast<std::size_t>(sy * tiles_per_side_ + sx);
-}
-
-bool FreeSpaceMap::within_reach(std::int64_t ix, std::int64_t iy) const {
-  return std::abs(ix - sensor_ix_) <= reach_cells_ && std::abs(iy - sensor_iy_) <= reach_cells_;
 }
 
 bool FreeSpaceMap::cell_of(const Eigen::Vector2d& p, std::int64_t& ix, std::int64_t& iy) const {
@@ -94,9 +85,8 @@ const FreeSpaceMap::Cell* FreeSpaceMap::find(std::int64_t ix, std::int64_t iy) c
   const std::size_t slot = slot_of(tx, ty);
   const TileTag& tag = tags_[slot];
   if (tag.generation != generation_ || tag.tx != tx || tag.ty != ty) return nullptr;
-  constexpr std::int64_t mask = kTileSide - 1;
   return &cells_[slot * static_cast<std::size_t>(kTileCells) +
-                 static_cast<std::size_t>(((iy & mask) << kTileBits) + (ix & mask))];
+                 static_cast<std::size_t>(in_tile(ix, iy))];
 }
 
 const FreeSpaceMap::Cell* FreeSpaceMap::find(const Eigen::Vector2d& p) const {
@@ -104,18 +94,16 @@ const FreeSpaceMap::Cell* FreeSpaceMap::find(const Eigen::Vector2d& p) const {
   return cell_of(p, ix, iy) ? find(ix, iy) : nullptr;
 }
 
-FreeSpaceMap::Cell& FreeSpaceMap::touch(std::int64_t ix, std::int64_t iy) {
-  const std::int64_t tx = ix >> kTileBits, ty = iy >> kTileBits;
+FreeSpaceMap::Cell* FreeSpaceMap::tile(std::int64_t tx, std::int64_t ty) {
   const std::size_t slot = slot_of(tx, ty);
-  Cell* tile = &cells_[slot * static_cast<std::size_t>(kTileCells)];
+  Cell* cells = &cells_[slot * static_cast<std::size_t>(kTileCells)];
   TileTag& tag = tags_[slot];
   if (tag.generation != generation_ || tag.tx != tx || tag.ty != ty) {
-    std::fill(tile, tile + kTileCells, kEmptyCell);
+    std::fill(cells, cells + kTileCells, kEmptyCell);
     tag = TileTag{tx, ty, generation_};
     ++tiles_started_;
   }
-  constexpr std::int64_t mask = kTileSide - 1;
-  return tile[((iy & mask) << kTileBits) + (ix & mask)];
+  return cells;
 }
 
 bool FreeSpaceMap::cell_free(const Eigen::Vector2d& p) const {
@@ -260,9 +248,17 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     const double length = (free_until - start) / c;
     const double start_cells = start / c;
     double t = 0.0;
-    // The reach is a square around the sensor: a beam that leaves it never comes back.
+    // The reach is a square around the sensor: a beam that leaves it never comes back. A beam
+    // crosses several cells of a tile in a row: the tile is looked up when the beam enters it.
+    std::int64_t tile_x = ix >> kTileBits, tile_y = iy >> kTileBits;
+    Cell* cells = tile(tile_x, tile_y);
     while (t < length && within_reach(ix, iy)) {
-      Cell& cell = touch(ix, iy);
+      if ((ix >> kTileBits) != tile_x || (iy >> kTileBits) != tile_y) {
+        tile_x = ix >> kTileBits;
+        tile_y = iy >> kTileBits;
+        cells = tile(tile_x, tile_y);
+      }
+      Cell& cell = cells[in_tile(ix, iy)];
       if (cell.last_scan != scans_) {
         cell.last_scan = scans_;
         cell.balance = static_cast<std::int16_t>(std::max(cell.balance - 1, -cap));

@@ -219,6 +219,38 @@ TEST(FreeSpaceMap, ScrollsWithTheSensorAndKeepsWhatIsWithinHalfAWindow) {
   EXPECT_FALSE(map.known_free({-980.0, 0.0}));
 }
 
+TEST(FreeSpaceMap, AWindowOfAnyNumberOfTilesScrollsTheSame) {
+  // 60 m: 600 cells, 75 tiles a side (not a power of two: slots by the remainder, here of
+  // negative tile coordinates too). Both maps see the same drive of 45 m; near the sensor they
+  // agree (asked at cell centres; the two windows' corners are 51.2 m and 30 m from the first
+  // pose, so a beam's path through the cells is computed from other numbers and may differ by a
+  // rounding error where it grazes a corner).
+  FreeSpaceConfig c;
+  FreeSpaceMap wide(c);
+  c.extent_m = 60.0;
+  FreeSpaceMap narrow(c);
+  for (int step = 0; step <= 450; ++step) {
+    const double x = -0.1 * step;
+    wide.add_scan(ring(4.0F), Pose2{x, 0.0, kPi});
+    narrow.add_scan(ring(4.0F), Pose2{x, 0.0, kPi});
+    if (step % 50 != 0 || step == 0) continue;
+    int free_cells = 0, disagree = 0;
+    for (int i = 0; i <= 120; ++i) {
+      for (int j = 0; j <= 120; ++j) {
+        const Eigen::Vector2d p(x - 6.05 + 0.1 * i, -6.05 + 0.1 * j);
+        disagree += wide.known_free(p) != narrow.known_free(p) ? 1 : 0;
+        EXPECT_LE(std::abs(wide.hit_balance(p) - narrow.hit_balance(p)), 1) << "step " << step;
+        free_cells += wide.known_free(p) ? 1 : 0;
+      }
+    }
+    EXPECT_LT(disagree, 121 * 121 / 100) << "step " << step;
+    EXPECT_GT(free_cells, 1000) << "step " << step;
+  }
+  // 30 m behind: still known to the wide window (reach 50.4 m), not to the narrow one (29.2 m).
+  EXPECT_TRUE(wide.known_free({-15.05, 0.05}));
+  EXPECT_FALSE(narrow.known_free({-15.05, 0.05}));
+}
+
 TEST(FreeSpaceMap, ClearForgetsEverythingAtOnceAndTheMapStartsAgainWhereTheSensorIs) {
   FreeSpaceConfig c;
   FreeSpaceMap map(c);

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <cstdlib>
 #include <memory>
 #include <vector>
 
@@ -133,13 +134,30 @@ class FreeSpaceMap {
   /// The cell (ix, iy) if its tile is held, else nullptr.
   const Cell* find(std::int64_t ix, std::int64_t iy) const;
   const Cell* find(const Eigen::Vector2d& p) const;
+  /// The cells of tile (tx, ty), the tile started if it was not held.
+  Cell* tile(std::int64_t tx, std::int64_t ty);
   /// The cell (ix, iy), its tile started if it was not held.
-  Cell& touch(std::int64_t ix, std::int64_t iy);
-  std::size_t slot_of(std::int64_t tx, std::int64_t ty) const;
-  bool within_reach(std::int64_t ix, std::int64_t iy) const;
+  Cell& touch(std::int64_t ix, std::int64_t iy) {
+    return tile(ix >> kTileBits, iy >> kTileBits)[in_tile(ix, iy)];
+  }
+  static std::int64_t in_tile(std::int64_t ix, std::int64_t iy) {
+    constexpr std::int64_t mask = kTileSide - 1;
+    return ((iy & mask) << kTileBits) + (ix & mask);
+  }
+  std::size_t slot_of(std::int64_t tx, std::int64_t ty) const {
+    if (slot_mask_ >= 0)
+      return static_cast<std::size_t>((ty & slot_mask_) * tiles_per_side_ + (tx & slot_mask_));
+    const std::int64_t sx = ((tx % tiles_per_side_) + tiles_per_side_) % tiles_per_side_;
+    const std::int64_t sy = ((ty % tiles_per_side_) + tiles_per_side_) % tiles_per_side_;
+    return static_cast<std::size_t>(sy * tiles_per_side_ + sx);
+  }
+  bool within_reach(std::int64_t ix, std::int64_t iy) const {
+    return std::abs(ix - sensor_ix_) <= reach_cells_ && std::abs(iy - sensor_iy_) <= reach_cells_;
+  }
 
   FreeSpaceConfig config_;
   std::int64_t tiles_per_side_ = 0;
+  std::int64_t slot_mask_ = -1;  // tiles_per_side_ - 1 when that is a power of two (the default).
   /// Cells written are within this many cells of the sensor's cell (half a window less a tile): a
   /// tile and the one that shares its slot are never both within reach.
   std::int64_t reach_cells_ = 0;

@@ -25,7 +25,8 @@ struct RunSettings {
 
 /// Registers every case with Google Benchmark. Names are "<algorithm>/<beams>", algorithm one of
 /// segmentation, filter_pipeline (the whole dynamic filter per scan, the thesis's configuration),
-/// filter_pipeline_default (the same with dispel's default configuration), reference_dbscan
+/// filter_pipeline_default (the same with dispel's default configuration),
+/// filter_pipeline_sparse (the default on a sparse log: every scan resets it), reference_dbscan
 /// (brute force), reference_dbscan_grid, and odometry_ct_step / odometry_omni_step (one UKF
 /// predict + wheel update; "beams" is 1). Each run sets the counter "beams".
 void register_benchmarks(const RunSettings& settings);

@@ -36,7 +36,8 @@ int main(int argc, char** argv) {
   bench_cmd
       ->add_option("--filter", bench.filter,
                    "Regular expression on case names: segmentation, filter_pipeline, "
-                   "filter_pipeline_default, reference_dbscan, reference_dbscan_grid, "
+                   "filter_pipeline_default, filter_pipeline_sparse, reference_dbscan, "
+                   "reference_dbscan_grid, "
                    "odometry_ct_step, odometry_omni_step (e.g. segmentation/1617)")
       ->capture_default_str();
   bench_cmd->add_option("--repetitions", bench.repetitions, "Repetitions per case (median taken)")

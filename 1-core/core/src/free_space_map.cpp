@@ -47,7 +47,7 @@ FreeSpaceMap::FreeSpaceMap(FreeSpaceConfig config) : config_(config) {
       static_cast<std::int64_t>(std::ceil(config_.extent_m / config_.cell_size_m));
   tiles_per_side_ = (cells_per_side + kTileSide - 1) / kTileSide;
   if ((tiles_per_side_ & (tiles_per_side_ - 1)) == 0) slot_mask_ = tiles_per_side_ - 1;
-  reach_cells_ = std::max<std::int64_t>(0, tiles_per_side_ * kTileSide / 2 - kTileSide);
+  reach_tiles_ = (tiles_per_side_ - 1) / 2;
   const auto slots = static_cast<std::size_t>(tiles_per_side_ * tiles_per_side_);
   // Not value-initialised: a slot's cells are written when its tile is started, and the pages of
   // slots never used are never touched.
@@ -69,19 +69,20 @@ bool FreeSpaceMap::cell_of(const Eigen::Vector2d& p, std::int64_t& ix, std::int6
   const double fx = std::floor((p.x() - anchor_.x()) / config_.cell_size_m);
   const double fy = std::floor((p.y() - anchor_.y()) / config_.cell_size_m);
   // Compared as doubles first: a point far away (or NaN) is refused before any integer cast.
-  const double reach = static_cast<double>(reach_cells_);
-  if (!(std::abs(fx - static_cast<double>(sensor_ix_)) <= reach &&
-        std::abs(fy - static_cast<double>(sensor_iy_)) <= reach)) {
+  const double reach = static_cast<double>((reach_tiles_ + 1) * kTileSide);
+  if (!(std::abs(fx - static_cast<double>(sensor_tx_ * kTileSide)) <= reach &&
+        std::abs(fy - static_cast<double>(sensor_ty_ * kTileSide)) <= reach)) {
     return false;
   }
   ix = static_cast<std::int64_t>(fx);
   iy = static_cast<std::int64_t>(fy);
-  return true;
+  return tile_within_reach(ix >> kTileBits, iy >> kTileBits);
 }
 
 const FreeSpaceMap::Cell* FreeSpaceMap::find(std::int64_t ix, std::int64_t iy) const {
   // Arithmetic shifts: floor division and a non-negative remainder for negative cells too.
   const std::int64_t tx = ix >> kTileBits, ty = iy >> kTileBits;
+  if (!tile_within_reach(tx, ty)) return nullptr;
   const std::size_t slot = slot_of(tx, ty);
   const TileTag& tag = tags_[slot];
   if (tag.generation != generation_ || tag.tx != tx || tag.ty != ty) return nullptr;
@@ -106,34 +107,35 @@ FreeSpaceMap::Cell* FreeSpaceMap::tile(std::int64_t tx, std::int64_t ty) {
   return cells;
 }
 
-bool FreeSpaceMap::cell_free(const Eigen::Vector2d& p) const {
-  const Cell* cell = find(p);
+bool FreeSpaceMap::cell_free(const Cell* cell) const {
   return cell != nullptr && cell->balance <= -config_.min_free_observations &&
          stamp_s_ - (epoch_s_ + cell->last_free_s) <= config_.memory_s;
 }
 
 bool FreeSpaceMap::known_free(const Eigen::Vector2d& point_m) const {
-  const double c = config_.cell_size_m;
+  std::int64_t ix = 0, iy = 0;
+  return cell_of(point_m, ix, iy) && known_free(ix, iy);
+}
+
+bool FreeSpaceMap::known_free(std::int64_t ix, std::int64_t iy) const {
   const int n = config_.neighbourhood_cells;
   // The point's own cell first: most points asked about (a surface's) fail there.
-  if (!cell_free(point_m)) return false;
+  if (!cell_free(find(ix, iy))) return false;
   for (int dx = -n; dx <= n; ++dx) {
     for (int dy = -n; dy <= n; ++dy) {
-      if ((dx != 0 || dy != 0) && !cell_free(point_m + Eigen::Vector2d(dx * c, dy * c))) {
-        return false;
-      }
+      if ((dx != 0 || dy != 0) && !cell_free(find(ix + dx, iy + dy))) return false;
     }
   }
   return true;
 }
 
 bool FreeSpaceMap::known_free(const Eigen::Vector2d& point_m, double max_beam_spacing_m) const {
-  if (!known_free(point_m)) return false;
-  const double c = config_.cell_size_m;
+  std::int64_t ix = 0, iy = 0;
+  if (!cell_of(point_m, ix, iy) || !known_free(ix, iy)) return false;
   const double limit = max_beam_spacing_m / kSpacingUnit_m;
   for (int dx = -1; dx <= 1; ++dx) {
     for (int dy = -1; dy <= 1; ++dy) {
-      const Cell* cell = find(point_m + Eigen::Vector2d(dx * c, dy * c));
+      const Cell* cell = find(ix + dx, iy + dy);
       if (cell == nullptr) return false;
       const std::uint8_t s = cell->finest_spacing;
       if (s == kNeverSeenThrough || static_cast<double>(s) > limit) return false;
@@ -162,7 +164,7 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     // The cells' boundaries as if the window were centred on the first pose.
     anchor_ = origin - Eigen::Vector2d::Constant(0.5 * config_.extent_m);
     placed_ = true;
-    sensor_ix_ = sensor_iy_ = 0;
+    sensor_tx_ = sensor_ty_ = 0;
     epoch_s_ = scan.stamp_s;
   }
   {
@@ -175,8 +177,8 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
       add_scan(scan, sensor_pose);
       return;
     }
-    sensor_ix_ = static_cast<std::int64_t>(fx);
-    sensor_iy_ = static_cast<std::int64_t>(fy);
+    sensor_tx_ = static_cast<std::int64_t>(fx) >> kTileBits;
+    sensor_ty_ = static_cast<std::int64_t>(fy) >> kTileBits;
   }
   ++scans_;
   stamp_s_ = scan.stamp_s;
@@ -248,14 +250,16 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     const double length = (free_until - start) / c;
     const double start_cells = start / c;
     double t = 0.0;
-    // The reach is a square around the sensor: a beam that leaves it never comes back. A beam
-    // crosses several cells of a tile in a row: the tile is looked up when the beam enters it.
+    // A beam crosses several cells of a tile in a row: the tile is looked up (and the reach, a
+    // square of tiles around the sensor's, checked) when the beam enters it. A beam that leaves
+    // the reach never comes back.
     std::int64_t tile_x = ix >> kTileBits, tile_y = iy >> kTileBits;
     Cell* cells = tile(tile_x, tile_y);
-    while (t < length && within_reach(ix, iy)) {
+    while (t < length) {
       if ((ix >> kTileBits) != tile_x || (iy >> kTileBits) != tile_y) {
         tile_x = ix >> kTileBits;
         tile_y = iy >> kTileBits;
+        if (!tile_within_reach(tile_x, tile_y)) break;
         cells = tile(tile_x, tile_y);
       }
       Cell& cell = cells[in_tile(ix, iy)];

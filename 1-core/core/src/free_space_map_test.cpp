@@ -246,9 +246,10 @@ TEST(FreeSpaceMap, AWindowOfAnyNumberOfTilesScrollsTheSame) {
     EXPECT_LT(disagree, 121 * 121 / 100) << "step " << step;
     EXPECT_GT(free_cells, 1000) << "step " << step;
   }
-  // 30 m behind: still known to the wide window (reach 50.4 m), not to the narrow one (29.2 m).
-  EXPECT_TRUE(wide.known_free({-15.05, 0.05}));
-  EXPECT_FALSE(narrow.known_free({-15.05, 0.05}));
+  // 31 m behind: still known to the wide window (reach 63 tiles, 50.4 m), not to the narrow one
+  // (37 tiles, 29.6 m).
+  EXPECT_TRUE(wide.known_free({-14.05, 0.05}));
+  EXPECT_FALSE(narrow.known_free({-14.05, 0.05}));
 }
 
 TEST(FreeSpaceMap, ClearForgetsEverythingAtOnceAndTheMapStartsAgainWhereTheSensorIs) {

@@ -19,8 +19,9 @@ namespace dispel {
 struct FreeSpaceConfig {
   bool enabled = true;
   double cell_size_m = 0.1;
-  /// Side of the square window of cells kept. Cells are written within half of it of the sensor
-  /// (minus 0.8 m); beyond that, beams are not traced and returns not counted.
+  /// Side of the square window of cells kept. Cells are kept in tiles of 8 x 8 within half of it of
+  /// the sensor's tile (less a tile: 50.4 m); beyond that, beams are not traced, returns not
+  /// counted, and nothing is known free.
   double extent_m = 102.4;
   /// Free space ends this far before each return, so a surface's own cells are never "free".
   double margin_m = 0.3;
@@ -127,7 +128,8 @@ class FreeSpaceMap {
   static constexpr std::int64_t kTileSide = std::int64_t{1} << kTileBits;
   static constexpr std::int64_t kTileCells = kTileSide * kTileSide;
 
-  bool cell_free(const Eigen::Vector2d& p) const;
+  bool cell_free(const Cell* cell) const;
+  bool known_free(std::int64_t ix, std::int64_t iy) const;
   /// The cell holding @p p (cell coordinates from the anchor), if the point is within reach of
   /// the latest sensor position.
   bool cell_of(const Eigen::Vector2d& p, std::int64_t& ix, std::int64_t& iy) const;
@@ -151,21 +153,22 @@ class FreeSpaceMap {
     const std::int64_t sy = ((ty % tiles_per_side_) + tiles_per_side_) % tiles_per_side_;
     return static_cast<std::size_t>(sy * tiles_per_side_ + sx);
   }
-  bool within_reach(std::int64_t ix, std::int64_t iy) const {
-    return std::abs(ix - sensor_ix_) <= reach_cells_ && std::abs(iy - sensor_iy_) <= reach_cells_;
+  bool tile_within_reach(std::int64_t tx, std::int64_t ty) const {
+    return std::abs(tx - sensor_tx_) <= reach_tiles_ && std::abs(ty - sensor_ty_) <= reach_tiles_;
   }
 
   FreeSpaceConfig config_;
   std::int64_t tiles_per_side_ = 0;
   std::int64_t slot_mask_ = -1;  // tiles_per_side_ - 1 when that is a power of two (the default).
-  /// Cells written are within this many cells of the sensor's cell (half a window less a tile): a
-  /// tile and the one that shares its slot are never both within reach.
-  std::int64_t reach_cells_ = 0;
+  /// Cells are written and read in tiles within this many tiles of the sensor's tile ((tiles a
+  /// side - 1) / 2: 63 of 128, 50.4 m): a tile and the one that shares its slot are never both
+  /// within reach.
+  std::int64_t reach_tiles_ = 0;
   Eigen::Vector2d anchor_ = Eigen::Vector2d::Zero();  // Corner of cell (0, 0).
   bool placed_ = false;
   std::uint32_t generation_ = 1;
-  std::int64_t sensor_ix_ = 0;  // The latest sensor position's cell.
-  std::int64_t sensor_iy_ = 0;
+  std::int64_t sensor_tx_ = 0;  // The latest sensor position's tile.
+  std::int64_t sensor_ty_ = 0;
   std::uint32_t scans_ = 0;
   double stamp_s_ = 0.0;  // Of the latest scan.
   double epoch_s_ = 0.0;  // Cells keep their stamps relative to this (the first scan's stamp).

@@ -49,9 +49,11 @@ FreeSpaceMap::FreeSpaceMap(FreeSpaceConfig config) : config_(config) {
   if ((tiles_per_side_ & (tiles_per_side_ - 1)) == 0) slot_mask_ = tiles_per_side_ - 1;
   reach_tiles_ = (tiles_per_side_ - 1) / 2;
   const auto slots = static_cast<std::size_t>(tiles_per_side_ * tiles_per_side_);
-  // Not value-initialised: a slot's cells are written when its tile is started, and the pages of
-  // slots never used are never touched.
-  cells_.reset(new Cell[slots * static_cast<std::size_t>(kTileCells)]);
+  // Zeroed here, once (a slot's cells are emptied again when its tile is started): the window's
+  // memory is resident from the start. Left untouched, its pages came in one by one as a robot
+  // whose odometry drifts reached new slots: resident memory rose for hours (the soak,
+  // docs/soak.md) and a scan now and then paid for page faults.
+  cells_.reset(new Cell[slots * static_cast<std::size_t>(kTileCells)]());
   tags_.assign(slots, TileTag{0, 0, 0});  // Generation 0 is never current.
 }
 

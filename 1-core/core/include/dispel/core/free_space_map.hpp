@@ -67,8 +67,8 @@ struct FreeSpaceConfig {
 /// the slot given by its coordinates modulo the window: a tile is started (its 64 cells emptied)
 /// when a beam first reaches it, and a tile the sensor has left behind by more than half a window
 /// is overwritten by the one that takes its slot. So the cost of a scan never depends on how far
-/// the sensor has gone or how often the filter was reset (clear() is O(1)); memory is the window's,
-/// touched as it is used.
+/// the sensor has gone or how often the filter was reset (clear() is O(1)); memory is the window's
+/// (16 MiB by default), all of it resident from the start.
 class FreeSpaceMap {
  public:
   explicit FreeSpaceMap(FreeSpaceConfig config);
@@ -104,7 +104,7 @@ class FreeSpaceMap {
   }
 
  private:
-  /// Trivially constructible, so the window's memory is touched only where tiles are started.
+  /// Trivially constructible: emptied by writing kEmptyCell when a tile is started.
   struct Cell {
     float last_free_s;        // When a beam last saw through it, seconds after epoch_s_.
     std::uint32_t last_scan;  // The scan that last counted for it (counts once per scan).

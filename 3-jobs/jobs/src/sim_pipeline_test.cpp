@@ -155,10 +155,11 @@ TEST(SimPipeline, AStreamedBagIsTheHeldRunsBag) {
 TEST(SimPipeline, ARunThatWouldNotFitOnTheDiskIsRefusedBeforeAnyWork) {
   const sim::Scenario s = load_scenario(scenario_path("thesis_hall"));
   const std::string path = test::temp_dir() + "/too_long.bag";
-  // The estimate: 1618 beams at 20 Hz and 50 Hz of samples, about 0.3 MB per second.
+  // The estimate: 1618 beams at 20 Hz and 50 Hz of samples, 0.76 MB per second before LZ4, about
+  // 0.16 MB after it (an upper bound: this scenario's bags compress to 0.03 MB per second).
   const double per_second = estimate_recording_bytes(s, 1000.0) / 1000.0;
-  EXPECT_GT(per_second, 0.2e6);
-  EXPECT_LT(per_second, 0.5e6);
+  EXPECT_GT(per_second, 0.1e6);
+  EXPECT_LT(per_second, 0.3e6);
   try {
     simulate_to_recording(s, 1, 1e9, path);
     ADD_FAILURE() << "a run of 1e9 s was started";

@@ -195,14 +195,7 @@ int run(const Options& o) {
   dispel::sim::SimulationSink sink;
   sink.scan = [&](dispel::sim::ScanFrame&& frame) { waiting.push_back(std::move(frame)); };
   sink.sensor = [&](const dispel::sim::SensorSample& s) {
-    enter(s.stamp_s - scenario.start_time_s);
-    const Clock::time_point t0 = Clock::now();
-    fusion.add_wheels(s.stamp_s, s.wheel_left_mps, s.wheel_right_mps);
-    fusion.add_imu(s.stamp_s, s.imu_yaw_rate_radps);
-    fusion.release();
-    const Clock::time_point t1 = Clock::now();
-    period.odom_us.push_back(
-        static_cast<float>(std::chrono::duration<double, std::micro>(t1 - t0).count()));
+    // The scans up to this sample first (they may belong to the period before it).
     while (!waiting.empty() && waiting.front().scan.stamp_s <= s.stamp_s) {
       const dispel::sim::ScanFrame& frame = waiting.front();
       const dispel::sim::SensorSample& before =
@@ -211,6 +204,14 @@ int run(const Options& o) {
       waiting.pop_front();
     }
     previous = s;
+    enter(s.stamp_s - scenario.start_time_s);
+    const Clock::time_point t0 = Clock::now();
+    fusion.add_wheels(s.stamp_s, s.wheel_left_mps, s.wheel_right_mps);
+    fusion.add_imu(s.stamp_s, s.imu_yaw_rate_radps);
+    fusion.release();
+    const Clock::time_point t1 = Clock::now();
+    period.odom_us.push_back(
+        static_cast<float>(std::chrono::duration<double, std::micro>(t1 - t0).count()));
   };
   const Clock::time_point start = Clock::now();
   dispel::sim::simulate(scenario, o.seed, duration_s, sink);

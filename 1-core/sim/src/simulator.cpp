@@ -455,6 +455,7 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
     }
     a.speed_mps = rp.min_speed_mps + u01(rng) * (rp.max_speed_mps - rp.min_speed_mps);
     a.pause_s = u01(rng) * rp.max_pause_s;
+    a.loop = rp.loop;
     specs.push_back(a);
   }
   for (const Actor& a : specs) {

@@ -193,6 +193,13 @@ TEST(Simulator, RandomPeopleKeepComingAndGoing) {
     // Every one of the four walked in every minute (a pause is at most 3 s).
     EXPECT_EQ(moving_per_minute[static_cast<std::size_t>(m)].size(), 4u) << "minute " << m;
   }
+  // With loop: false each walks its three waypoints once (at most 3 x 16 m): the hall is still
+  // by the last minute.
+  s.random_people.loop = false;
+  for (auto& seen : moving_per_minute) seen.clear();
+  ASSERT_EQ(simulate(s, 5, kMinutes * 60.0, sink), 4);
+  EXPECT_EQ(moving_per_minute.front().size(), 4u);
+  EXPECT_TRUE(moving_per_minute.back().empty());
 }
 
 TEST(Simulator, MaskedSectorsAndTheRangeLimitReturnNothing) {

@@ -99,12 +99,38 @@ string(JSON processed GET "${stats}" scans processed)
 string(JSON dynamic GET "${stats}" beams_removed dynamic)
 string(JSON median GET "${stats}" scan_time_us median)
 string(JSON p99 GET "${stats}" scan_time_us p99)
+string(JSON p99_9 GET "${stats}" scan_time_us p99_9)
+string(JSON max GET "${stats}" scan_time_us max)
+string(JSON cpu_median GET "${stats}" scan_cpu_time_us median)
+string(JSON cpu_max GET "${stats}" scan_cpu_time_us max)
 string(JSON tracks GET "${stats}" tracks_created)
 string(JSON min_points GET "${stats}" config min_points)
 if(NOT total EQUAL 1265 OR NOT processed EQUAL 1265 OR NOT dynamic GREATER 10000
-   OR NOT median GREATER 0 OR p99 LESS median OR NOT tracks GREATER 10 OR NOT min_points EQUAL 4)
+   OR NOT median GREATER 0 OR p99 LESS median OR p99_9 LESS p99 OR max LESS p99_9
+   OR NOT cpu_median GREATER 0 OR cpu_max LESS cpu_median OR NOT tracks GREATER 10
+   OR NOT min_points EQUAL 4)
   message(FATAL_ERROR "bad statistics: ${stats}")
 endif()
+# The five scans that cost the most CPU time, the costliest first, each with what it did.
+string(JSON slow_count LENGTH "${stats}" slowest_scans)
+if(NOT slow_count EQUAL 5)
+  message(FATAL_ERROR "slowest_scans: ${slow_count} entries, 5 expected: ${stats}")
+endif()
+set(previous_cpu "")
+foreach(k RANGE 4)
+  string(JSON cpu GET "${stats}" slowest_scans ${k} cpu_time_us)
+  string(JSON beams GET "${stats}" slowest_scans ${k} beams)
+  string(JSON index GET "${stats}" slowest_scans ${k} index)
+  string(JSON event GET "${stats}" slowest_scans ${k} event)
+  if(cpu GREATER cpu_max OR cpu LESS cpu_median OR beams LESS 1 OR index LESS 0
+     OR NOT index LESS 1265 OR event STREQUAL "")
+    message(FATAL_ERROR "slowest_scans[${k}]: ${stats}")
+  endif()
+  if(NOT previous_cpu STREQUAL "" AND cpu GREATER previous_cpu)
+    message(FATAL_ERROR "slowest_scans not costliest first: ${stats}")
+  endif()
+  set(previous_cpu ${cpu})
+endforeach()
 
 # Ctrl-C: either interrupted with nothing written, or already done with a complete bag. A signal
 # that comes while the program is still loading its shared libraries (MRPT's, for rawlogs, take

@@ -117,6 +117,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   const ScanCheck checked = check(scan, sensor_pose);
   if (checked.rejected) {
     pass_through(scan, checked.event, out);
+    record_work(scan, out);
     return;
   }
   const bool registering = config_.registration.enabled;
@@ -171,6 +172,18 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
     }
   }
   ++counters_.events[static_cast<std::size_t>(checked.event)];
+  record_work(scan, out);
+}
+
+void DynamicFilter::record_work(const LaserScan& scan, FilterResult& out) {
+  ScanWork& w = out.work;
+  w.beams = static_cast<std::int32_t>(scan.size());
+  w.objects = static_cast<std::int32_t>(out.segmentation.objects.size());
+  w.tracks = static_cast<std::int32_t>(tracks_.size());
+  w.registration_points = out.registration.points;
+  w.registration_iterations = out.registration.iterations;
+  w.map_voxels = static_cast<std::int64_t>(registration_.voxel_count());
+  w.free_space_tiles_started = free_space_.take_tiles_started();
 }
 
 // Step 1: a scan or pose that cannot be used is passed through; a jump in time or pose resets the
@@ -232,6 +245,8 @@ void DynamicFilter::pass_through_unfiltered(const LaserScan& scan, FilterEvent e
     out.labels[i] = usable_limits && scan.is_valid(i) ? BeamLabel::kNoObject : BeamLabel::kInvalid;
   }
   out.tracks.clear();
+  out.work = ScanWork{};
+  out.work.beams = static_cast<std::int32_t>(scan.size());
 }
 
 void DynamicFilter::pass_through(const LaserScan& scan, FilterEvent event, FilterResult& out) {

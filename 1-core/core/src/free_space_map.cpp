@@ -43,40 +43,85 @@ void FreeSpaceConfig::validate() const {
 
 FreeSpaceMap::FreeSpaceMap(FreeSpaceConfig config) : config_(config) {
   config_.validate();
-  cells_per_side_ = static_cast<std::int64_t>(std::ceil(config_.extent_m / config_.cell_size_m));
-  tiles_per_side_ = (cells_per_side_ + kTileSide - 1) / kTileSide;
+  const auto cells_per_side =
+      static_cast<std::int64_t>(std::ceil(config_.extent_m / config_.cell_size_m));
+  tiles_per_side_ = (cells_per_side + kTileSide - 1) / kTileSide;
+  reach_cells_ = std::max<std::int64_t>(0, tiles_per_side_ * kTileSide / 2 - kTileSide);
+  const auto slots = static_cast<std::size_t>(tiles_per_side_ * tiles_per_side_);
+  // Not value-initialised: a slot's cells are written when its tile is started, and the pages of
+  // slots never used are never touched.
+  cells_.reset(new Cell[slots * static_cast<std::size_t>(kTileCells)]);
+  tags_.assign(slots, TileTag{0, 0, 0});  // Generation 0 is never current.
 }
 
 void FreeSpaceMap::clear() {
-  cells_.clear();
   placed_ = false;
+  ++generation_;
+  if (generation_ == 0) {  // Wrapped after 2^32 clears: no tag may look current.
+    std::fill(tags_.begin(), tags_.end(), TileTag{0, 0, 0});
+    generation_ = 1;
+  }
 }
 
-void FreeSpaceMap::recenter(const Eigen::Vector2d& center) {
-  origin_ = center - Eigen::Vector2d::Constant(0.5 * config_.extent_m);
-  cells_.assign(static_cast<std::size_t>(tiles_per_side_ * tiles_per_side_ * kTileSide * kTileSide),
-                Cell{});
-  placed_ = true;
+std::size_t FreeSpaceMap::slot_of(std::int64_t tx, std::int64_t ty) const {
+  const std::int64_t sx = ((tx % tiles_per_side_) + tiles_per_side_) % tiles_per_side_;
+  const std::int64_t sy = ((ty % tiles_per_side_) + tiles_per_side_) % tiles_per_side_;
+  return static_cast<std::size_t>(sy * tiles_per_side_ + sx);
 }
 
-bool FreeSpaceMap::index_of(const Eigen::Vector2d& p, std::int64_t& index) const {
+bool FreeSpaceMap::within_reach(std::int64_t ix, std::int64_t iy) const {
+  return std::abs(ix - sensor_ix_) <= reach_cells_ && std::abs(iy - sensor_iy_) <= reach_cells_;
+}
+
+bool FreeSpaceMap::cell_of(const Eigen::Vector2d& p, std::int64_t& ix, std::int64_t& iy) const {
   if (!placed_) return false;
-  const double fx = (p.x() - origin_.x()) / config_.cell_size_m;
-  const double fy = (p.y() - origin_.y()) / config_.cell_size_m;
-  if (!(fx >= 0.0 && fy >= 0.0)) return false;
-  const auto ix = static_cast<std::int64_t>(fx);
-  const auto iy = static_cast<std::int64_t>(fy);
-  if (ix >= cells_per_side_ || iy >= cells_per_side_) return false;
-  index = cell_index(ix, iy);
+  const double fx = std::floor((p.x() - anchor_.x()) / config_.cell_size_m);
+  const double fy = std::floor((p.y() - anchor_.y()) / config_.cell_size_m);
+  // Compared as doubles first: a point far away (or NaN) is refused before any integer cast.
+  const double reach = static_cast<double>(reach_cells_);
+  if (!(std::abs(fx - static_cast<double>(sensor_ix_)) <= reach &&
+        std::abs(fy - static_cast<double>(sensor_iy_)) <= reach)) {
+    return false;
+  }
+  ix = static_cast<std::int64_t>(fx);
+  iy = static_cast<std::int64_t>(fy);
   return true;
 }
 
+const FreeSpaceMap::Cell* FreeSpaceMap::find(std::int64_t ix, std::int64_t iy) const {
+  // Arithmetic shifts: floor division and a non-negative remainder for negative cells too.
+  const std::int64_t tx = ix >> kTileBits, ty = iy >> kTileBits;
+  const std::size_t slot = slot_of(tx, ty);
+  const TileTag& tag = tags_[slot];
+  if (tag.generation != generation_ || tag.tx != tx || tag.ty != ty) return nullptr;
+  constexpr std::int64_t mask = kTileSide - 1;
+  return &cells_[slot * static_cast<std::size_t>(kTileCells) +
+                 static_cast<std::size_t>(((iy & mask) << kTileBits) + (ix & mask))];
+}
+
+const FreeSpaceMap::Cell* FreeSpaceMap::find(const Eigen::Vector2d& p) const {
+  std::int64_t ix = 0, iy = 0;
+  return cell_of(p, ix, iy) ? find(ix, iy) : nullptr;
+}
+
+FreeSpaceMap::Cell& FreeSpaceMap::touch(std::int64_t ix, std::int64_t iy) {
+  const std::int64_t tx = ix >> kTileBits, ty = iy >> kTileBits;
+  const std::size_t slot = slot_of(tx, ty);
+  Cell* tile = &cells_[slot * static_cast<std::size_t>(kTileCells)];
+  TileTag& tag = tags_[slot];
+  if (tag.generation != generation_ || tag.tx != tx || tag.ty != ty) {
+    std::fill(tile, tile + kTileCells, kEmptyCell);
+    tag = TileTag{tx, ty, generation_};
+    ++tiles_started_;
+  }
+  constexpr std::int64_t mask = kTileSide - 1;
+  return tile[((iy & mask) << kTileBits) + (ix & mask)];
+}
+
 bool FreeSpaceMap::cell_free(const Eigen::Vector2d& p) const {
-  std::int64_t i = 0;
-  if (!index_of(p, i)) return false;
-  const Cell& cell = cells_[static_cast<std::size_t>(i)];
-  return cell.balance <= -config_.min_free_observations &&
-         stamp_s_ - (epoch_s_ + cell.last_free_s) <= config_.memory_s;
+  const Cell* cell = find(p);
+  return cell != nullptr && cell->balance <= -config_.min_free_observations &&
+         stamp_s_ - (epoch_s_ + cell->last_free_s) <= config_.memory_s;
 }
 
 bool FreeSpaceMap::known_free(const Eigen::Vector2d& point_m) const {
@@ -100,9 +145,9 @@ bool FreeSpaceMap::known_free(const Eigen::Vector2d& point_m, double max_beam_sp
   const double limit = max_beam_spacing_m / kSpacingUnit_m;
   for (int dx = -1; dx <= 1; ++dx) {
     for (int dy = -1; dy <= 1; ++dy) {
-      std::int64_t i = 0;
-      if (!index_of(point_m + Eigen::Vector2d(dx * c, dy * c), i)) return false;
-      const std::uint8_t s = cells_[static_cast<std::size_t>(i)].finest_spacing;
+      const Cell* cell = find(point_m + Eigen::Vector2d(dx * c, dy * c));
+      if (cell == nullptr) return false;
+      const std::uint8_t s = cell->finest_spacing;
       if (s == kNeverSeenThrough || static_cast<double>(s) > limit) return false;
     }
   }
@@ -110,13 +155,13 @@ bool FreeSpaceMap::known_free(const Eigen::Vector2d& point_m, double max_beam_sp
 }
 
 int FreeSpaceMap::occupied_scans(const Eigen::Vector2d& point_m) const {
-  std::int64_t i = 0;
-  return index_of(point_m, i) ? cells_[static_cast<std::size_t>(i)].occupied : 0;
+  const Cell* cell = find(point_m);
+  return cell != nullptr ? cell->occupied : 0;
 }
 
 int FreeSpaceMap::hit_balance(const Eigen::Vector2d& point_m) const {
-  std::int64_t i = 0;
-  return index_of(point_m, i) ? cells_[static_cast<std::size_t>(i)].balance : 0;
+  const Cell* cell = find(point_m);
+  return cell != nullptr ? cell->balance : 0;
 }
 
 // Every kCoarsestStride-th beam is traced from the scanner on; see add_scan().
@@ -124,15 +169,26 @@ constexpr std::size_t kCoarsestStride = 16;
 
 void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
   const Eigen::Vector2d origin = sensor_pose.translation();
+  if (!(std::isfinite(origin.x()) && std::isfinite(origin.y()))) return;
   if (!placed_) {
-    recenter(origin);
+    // The cells' boundaries as if the window were centred on the first pose.
+    anchor_ = origin - Eigen::Vector2d::Constant(0.5 * config_.extent_m);
+    placed_ = true;
+    sensor_ix_ = sensor_iy_ = 0;
     epoch_s_ = scan.stamp_s;
   }
-  std::int64_t probe = 0;
-  const double keep = 0.25 * config_.extent_m;  // Re-centre well before the edge.
-  if (!index_of(origin + Eigen::Vector2d(keep, keep), probe) ||
-      !index_of(origin - Eigen::Vector2d(keep, keep), probe)) {
-    recenter(origin);
+  {
+    const double fx = std::floor((origin.x() - anchor_.x()) / config_.cell_size_m);
+    const double fy = std::floor((origin.y() - anchor_.y()) / config_.cell_size_m);
+    // A sensor that jumped absurdly far (2^40 cells) starts afresh rather than overflow.
+    constexpr double kFar = 1099511627776.0;
+    if (!(std::abs(fx) < kFar && std::abs(fy) < kFar)) {
+      clear();
+      add_scan(scan, sensor_pose);
+      return;
+    }
+    sensor_ix_ = static_cast<std::int64_t>(fx);
+    sensor_iy_ = static_cast<std::int64_t>(fy);
   }
   ++scans_;
   stamp_s_ = scan.stamp_s;
@@ -153,9 +209,9 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
   // Hits first: a cell hit in this scan counts as hit, whatever other beams passed through it.
   for (std::size_t b = 0; b < scan.size(); ++b) {
     if (!scan.is_valid(b)) continue;
-    std::int64_t i = 0;
-    if (!index_of(origin + scan.ranges_m[b] * directions_[b], i)) continue;
-    Cell& cell = cells_[static_cast<std::size_t>(i)];
+    std::int64_t ix = 0, iy = 0;
+    if (!cell_of(origin + scan.ranges_m[b] * directions_[b], ix, iy)) continue;
+    Cell& cell = touch(ix, iy);
     if (cell.last_scan == scans_) continue;
     cell.last_scan = scans_;
     cell.balance = static_cast<std::int16_t>(std::min(cell.balance + 1, cap));
@@ -191,10 +247,10 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     // traversal, in cell units).
     const Eigen::Vector2d& dir = directions_[b];
     const Eigen::Vector2d from = origin + start * dir;
-    const double fx = (from.x() - origin_.x()) / c, fy = (from.y() - origin_.y()) / c;
+    const double fx = (from.x() - anchor_.x()) / c, fy = (from.y() - anchor_.y()) / c;
     const double cx = std::floor(fx), cy = std::floor(fy);
-    auto ix = static_cast<std::int64_t>(cx);
-    auto iy = static_cast<std::int64_t>(cy);
+    std::int64_t ix = 0, iy = 0;
+    if (!cell_of(from, ix, iy)) continue;
     const int step_x = dir.x() > 0.0 ? 1 : -1, step_y = dir.y() > 0.0 ? 1 : -1;
     const double inf = std::numeric_limits<double>::infinity();
     const double delta_x = dir.x() != 0.0 ? std::abs(1.0 / dir.x()) : inf;
@@ -204,8 +260,9 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     const double length = (free_until - start) / c;
     const double start_cells = start / c;
     double t = 0.0;
-    while (t < length && ix >= 0 && iy >= 0 && ix < cells_per_side_ && iy < cells_per_side_) {
-      Cell& cell = cells_[static_cast<std::size_t>(cell_index(ix, iy))];
+    // The reach is a square around the sensor: a beam that leaves it never comes back.
+    while (t < length && within_reach(ix, iy)) {
+      Cell& cell = touch(ix, iy);
       if (cell.last_scan != scans_) {
         cell.last_scan = scans_;
         cell.balance = static_cast<std::int16_t>(std::max(cell.balance - 1, -cap));

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 
@@ -184,6 +186,76 @@ TEST(FreeSpaceMap, NeedsEnoughObservationsAndFollowsTheSensorPose) {
   map.add_scan(ring(4.0F), Pose2{10.0, 5.0, kPi / 2.0});
   EXPECT_TRUE(map.known_free({10.0, 7.0}));
   EXPECT_FALSE(map.known_free({12.0, 5.0 - 1.0}));
+}
+
+TEST(FreeSpaceMap, ScrollsWithTheSensorAndKeepsWhatIsWithinHalfAWindow) {
+  // The window is 102.4 m. The sensor drives 40 m along -x (past the window's first edge, into
+  // negative cells): what it saw at the start, 40 m behind, is still known; nothing is lost by
+  // re-centring, and the way ahead is seen as on the first scan.
+  FreeSpaceConfig c;
+  FreeSpaceMap map(c);
+  for (int k = 0; k < 3; ++k) map.add_scan(ring(4.0F), Pose2{0.0, 0.0, kPi});
+  ASSERT_TRUE(map.known_free({-2.0, 0.0}));
+  for (int step = 1; step <= 400; ++step) {
+    map.add_scan(ring(4.0F), Pose2{-0.1 * step, 0.0, kPi});
+  }
+  EXPECT_TRUE(map.known_free({-2.0, 0.0}));  // Seen 40 m back, within the memory of 30 s.
+  for (int k = 0; k < 3; ++k) map.add_scan(ring(4.0F), Pose2{-40.0, 0.0, kPi});
+  EXPECT_TRUE(map.known_free({-42.0, 0.0}));
+  EXPECT_FALSE(map.known_free({-44.5, 0.0}));  // Behind the surface.
+  // Driving on for 1 km: each tile is started as the beams reach it, a few per scan, never the
+  // window (128 x 128 tiles).
+  map.take_tiles_started();
+  std::int64_t most = 0;
+  for (int step = 1; step <= 10000; ++step) {
+    map.add_scan(ring(4.0F), Pose2{-40.0 - 0.1 * step, 0.0, kPi});
+    most = std::max(most, map.take_tiles_started());
+  }
+  EXPECT_GT(most, 0);
+  EXPECT_LE(most, 20);
+  EXPECT_TRUE(map.known_free({-1042.0, 0.0}));
+  // Far behind (more than half a window) is forgotten, whatever the slots hold now.
+  EXPECT_FALSE(map.known_free({-2.0, 0.0}));
+  EXPECT_FALSE(map.known_free({-980.0, 0.0}));
+}
+
+TEST(FreeSpaceMap, ClearForgetsEverythingAtOnceAndTheMapStartsAgainWhereTheSensorIs) {
+  FreeSpaceConfig c;
+  FreeSpaceMap map(c);
+  for (int k = 0; k < 3; ++k) map.add_scan(ring(4.0F), Pose2{});
+  const std::int64_t first = map.take_tiles_started();
+  EXPECT_GT(first, 0);
+  map.add_scan(ring(4.0F), Pose2{});
+  EXPECT_EQ(map.take_tiles_started(), 0);  // The same place: every tile is held.
+  map.clear();
+  EXPECT_FALSE(map.known_free({1.0, 0.0}));
+  EXPECT_EQ(map.hit_balance({4.0, 0.0}), 0);
+  // Somewhere else entirely (a reset after a jump of 1e6 m): placed there, not 1e6 m away.
+  for (int k = 0; k < 3; ++k) map.add_scan(ring(4.0F), Pose2{1e6, -1e6, 0.0});
+  EXPECT_TRUE(map.known_free({1e6 + 1.0, -1e6}));
+  EXPECT_FALSE(map.known_free({1.0, 0.0}));
+  // Started afresh there: as many tiles as the first time, give or take the ring's edge (the
+  // cells' boundaries fall a rounding error apart at 1e6 m).
+  const std::int64_t again = map.take_tiles_started();
+  EXPECT_GT(again, first / 2);
+  EXPECT_LT(again, 2 * first);
+}
+
+TEST(FreeSpaceMap, PointsOutOfReachOrNotFiniteAreNeverFree) {
+  FreeSpaceConfig c;
+  FreeSpaceMap map(c);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(map.known_free({nan, 0.0}));
+  for (int k = 0; k < 3; ++k) map.add_scan(ring(4.0F), Pose2{});
+  EXPECT_FALSE(map.known_free({nan, 0.0}));
+  EXPECT_FALSE(map.known_free({inf, 0.0}));
+  EXPECT_FALSE(map.known_free({1e300, -1e300}));
+  EXPECT_EQ(map.occupied_scans({-1e300, 0.0}), 0);
+  // A sensor pose that is not finite adds nothing and breaks nothing.
+  map.add_scan(ring(4.0F), Pose2{nan, 0.0, 0.0});
+  map.add_scan(ring(4.0F), Pose2{1e300, 0.0, 0.0});
+  EXPECT_FALSE(map.known_free({1.0, 0.0}));  // Far away now: the map started again there.
 }
 
 TEST(FreeSpaceConfig, BadValuesAreRejectedByName) {

@@ -153,5 +153,42 @@ TEST(ScanFilterRunner, TimesAreTakenPerWindow) {
   EXPECT_EQ(runner.take_times().count, 0);
 }
 
+TEST(ScanFilterRunner, EachScanSaysWhatItCostAndWhatItDid) {
+  ScanFilterRunner runner({});
+  double cpu_total = 0.0;
+  std::int64_t first_tiles = 0, later_tiles = 0;
+  for (int k = 0; k < 40; ++k) {
+    const LaserScan scan = scene(k, 0.05);
+    const FilterResult& r = runner.process(scan, 0.0, Pose2{});
+    EXPECT_EQ(r.work.beams, 361);
+    EXPECT_EQ(r.work.objects, static_cast<std::int32_t>(r.segmentation.objects.size()));
+    EXPECT_EQ(r.work.tracks, static_cast<std::int32_t>(r.tracks.size()));
+    EXPECT_EQ(r.work.registration_points, r.registration.points);
+    EXPECT_EQ(r.work.registration_iterations, r.registration.iterations);
+    // The first scan empties the free-space tiles the room's beams reach; a scanner that stays
+    // put needs few more (a registered pose that moves by millimetres reaches a tile at the
+    // room's edge now and then).
+    if (k == 0) {
+      first_tiles = r.work.free_space_tiles_started;
+    } else {
+      later_tiles += r.work.free_space_tiles_started;
+    }
+    if (k > 0) EXPECT_GT(r.work.map_voxels, 0);  // The room, learnt by the registration.
+    EXPECT_GE(runner.last_cpu_time_s(), 0.0);
+    cpu_total += runner.last_cpu_time_s();
+  }
+  EXPECT_GT(cpu_total, 0.0);
+  EXPECT_GT(first_tiles, 20);  // A half disc of 5 m: about 60 tiles of 0.8 m.
+  EXPECT_LT(later_tiles, first_tiles / 4);
+  // A scan passed through says only its beams.
+  LaserScan bad = scene(40, 0.05);
+  bad.angle_increment_rad = 0.0;
+  const FilterResult& r = runner.process(bad, 0.0, Pose2{});
+  EXPECT_EQ(r.event, FilterEvent::kRejectedScan);
+  EXPECT_EQ(r.work.beams, 361);
+  EXPECT_EQ(r.work.objects, 0);
+  EXPECT_EQ(r.work.free_space_tiles_started, 0);
+}
+
 }  // namespace
 }  // namespace dispel::pipeline

@@ -46,6 +46,8 @@ class ScanFilter {
     const FilterResult& result = runner_.process(scan, stated_period_s, pose);
     ++stats_.scans;
     stats_.scan_time_s.push_back(runner_.last_time_s());
+    stats_.scan_cpu_time_s.push_back(runner_.last_cpu_time_s());
+    keep_if_slow(scan, result);
     if (result.registration.registered) {
       stats_.registration_residual_m.push_back(result.registration.residual_m);
       stats_.registration_inlier_share.push_back(result.registration.inlier_share);
@@ -80,6 +82,21 @@ class ScanFilter {
   }
 
  private:
+  // Keeps the kSlowScansKept scans that cost the most CPU time (a short list, sorted costliest
+  // first: an insertion per slow scan).
+  void keep_if_slow(const LaserScan& scan, const FilterResult& result) {
+    std::vector<SlowScan>& slow = stats_.slowest_scans;
+    const double cpu = runner_.last_cpu_time_s();
+    if (slow.size() == FilterJobStats::kSlowScansKept && !(cpu > slow.back().cpu_time_s)) return;
+    const SlowScan s{stats_.scans - 1, scan.stamp_s, runner_.last_time_s(), cpu,
+                     result.event,     result.work};
+    const auto at = std::upper_bound(
+        slow.begin(), slow.end(), s,
+        [](const SlowScan& a, const SlowScan& b) { return a.cpu_time_s > b.cpu_time_s; });
+    slow.insert(at, s);
+    if (slow.size() > FilterJobStats::kSlowScansKept) slow.pop_back();
+  }
+
   // A log whose scans mostly reset the filter or pass through is filtered into (almost) nothing;
   // the summary alone ("0 dynamic removed") would not say so.
   void warn_when_mostly_unfiltered() {

@@ -98,6 +98,17 @@ struct TrackedObject {
 };
 
 /// The result of filtering one scan.
+/// What the filter did for one scan: the sizes its cost grows with (to tell a slow scan's cause).
+struct ScanWork {
+  std::int32_t beams = 0;
+  std::int32_t objects = 0;  ///< Segmented objects.
+  std::int32_t tracks = 0;   ///< Live tracks after the scan.
+  std::int32_t registration_points = 0;
+  std::int32_t registration_iterations = 0;
+  std::int64_t map_voxels = 0;                ///< The registration's local map after the scan.
+  std::int64_t free_space_tiles_started = 0;  ///< Free-space tiles emptied for this scan.
+};
+
 struct FilterResult {
   FilterEvent event = FilterEvent::kFiltered;
   /// The input scan with removed beams set to NaN (REP 117); unchanged when rejected.
@@ -116,6 +127,7 @@ struct FilterResult {
   std::optional<Pose2> sensor_pose;
   /// How the scan registered (all zero when the registration is off).
   RegistrationReport registration;
+  ScanWork work;
 };
 
 /// The dynamic object filter. Feed it scans in time order with the pose of the sensor in a fixed
@@ -216,6 +228,8 @@ class DynamicFilter {
 
   // Step 1.
   void pass_through(const LaserScan& scan, FilterEvent event, FilterResult& out);
+  /// Fills out.work (the sizes of what this scan cost).
+  void record_work(const LaserScan& scan, FilterResult& out);
   // Step 4 (track_matching.cpp).
   void find_split_parents(double stamp_s);
   void associate_nearest();

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "dispel/core/laser_scan.hpp"
@@ -17,7 +18,9 @@ namespace dispel {
 struct FreeSpaceConfig {
   bool enabled = true;
   double cell_size_m = 0.1;
-  double extent_m = 102.4;  ///< Side of the square window kept around the first pose.
+  /// Side of the square window of cells kept. Cells are written within half of it of the sensor
+  /// (minus 0.8 m); beyond that, beams are not traced and returns not counted.
+  double extent_m = 102.4;
   /// Free space ends this far before each return, so a surface's own cells are never "free".
   double margin_m = 0.3;
   /// Each cell keeps a balance of evidence: +1 for a scan that hit it, -1 for a scan that saw
@@ -57,8 +60,13 @@ struct FreeSpaceConfig {
   void validate() const;
 };
 
-/// A square window of cells around the first pose; each cell keeps the balance of the scans that
-/// hit it and the scans that saw through it. Moving out of the window re-centres it.
+/// A square window of cells that scrolls with the sensor; each cell keeps the balance of the scans
+/// that hit it and the scans that saw through it. The cells are stored in tiles of 8 x 8, each in
+/// the slot given by its coordinates modulo the window: a tile is started (its 64 cells emptied)
+/// when a beam first reaches it, and a tile the sensor has left behind by more than half a window
+/// is overwritten by the one that takes its slot. So the cost of a scan never depends on how far
+/// the sensor has gone or how often the filter was reset (clear() is O(1)); memory is the window's,
+/// touched as it is used.
 class FreeSpaceMap {
  public:
   explicit FreeSpaceMap(FreeSpaceConfig config);
@@ -83,43 +91,69 @@ class FreeSpaceMap {
   /// then every return's cell is hit (a hit in the same scan wins over a beam passing by).
   void add_scan(const LaserScan& scan, const Pose2& sensor_pose);
 
+  /// Forgets everything (O(1): the tiles are marked of an earlier generation).
   void clear();
   const FreeSpaceConfig& config() const { return config_; }
+  /// Tiles started since the last call (the work of emptying them: a statistic).
+  std::int64_t take_tiles_started() {
+    const std::int64_t n = tiles_started_;
+    tiles_started_ = 0;
+    return n;
+  }
 
  private:
+  /// Trivially constructible, so the window's memory is touched only where tiles are started.
   struct Cell {
-    float last_free_s = 0.0F;     // When a beam last saw through it, seconds after epoch_s_.
-    std::uint32_t last_scan = 0;  // The scan that last counted for it (counts once per scan).
-    std::int16_t balance = 0;     // Scans hit minus scans seen through, clamped.
-    std::int16_t occupied = 0;    // The same, clamped to [0, 2 * long_occupied_scans].
+    float last_free_s;        // When a beam last saw through it, seconds after epoch_s_.
+    std::uint32_t last_scan;  // The scan that last counted for it (counts once per scan).
+    std::int16_t balance;     // Scans hit minus scans seen through, clamped.
+    std::int16_t occupied;    // The same, clamped to [0, 2 * long_occupied_scans].
     /// The finest beam spacing it was seen through at, in kSpacingUnit_m (kNeverSeenThrough:
-    /// never), since the window was placed.
-    std::uint8_t finest_spacing = kNeverSeenThrough;
+    /// never), since its tile was started.
+    std::uint8_t finest_spacing;
   };
   static constexpr std::uint8_t kNeverSeenThrough = 255;
   static constexpr double kSpacingUnit_m = 0.002;
-  bool cell_free(const Eigen::Vector2d& p) const;
-  bool index_of(const Eigen::Vector2d& p, std::int64_t& index) const;
-  /// Cells are stored in square tiles of kTileSide x kTileSide (a beam crosses cells near each
-  /// other in memory, whatever its direction); the index of cell (ix, iy) of the window.
+  static constexpr Cell kEmptyCell{0.0F, 0, 0, 0, kNeverSeenThrough};
+  /// Which tile a slot holds: tile coordinates (in tiles from the anchor) and the map's generation
+  /// when it was started (a tile of an earlier generation was cleared).
+  struct TileTag {
+    std::int64_t tx = 0;
+    std::int64_t ty = 0;
+    std::uint32_t generation = 0;
+  };
   static constexpr std::int64_t kTileBits = 3;
   static constexpr std::int64_t kTileSide = std::int64_t{1} << kTileBits;
-  std::int64_t cell_index(std::int64_t ix, std::int64_t iy) const {
-    constexpr std::int64_t mask = kTileSide - 1;
-    return (((iy >> kTileBits) * tiles_per_side_ + (ix >> kTileBits)) << (2 * kTileBits)) +
-           ((iy & mask) << kTileBits) + (ix & mask);
-  }
-  void recenter(const Eigen::Vector2d& center);
+  static constexpr std::int64_t kTileCells = kTileSide * kTileSide;
+
+  bool cell_free(const Eigen::Vector2d& p) const;
+  /// The cell holding @p p (cell coordinates from the anchor), if the point is within reach of
+  /// the latest sensor position.
+  bool cell_of(const Eigen::Vector2d& p, std::int64_t& ix, std::int64_t& iy) const;
+  /// The cell (ix, iy) if its tile is held, else nullptr.
+  const Cell* find(std::int64_t ix, std::int64_t iy) const;
+  const Cell* find(const Eigen::Vector2d& p) const;
+  /// The cell (ix, iy), its tile started if it was not held.
+  Cell& touch(std::int64_t ix, std::int64_t iy);
+  std::size_t slot_of(std::int64_t tx, std::int64_t ty) const;
+  bool within_reach(std::int64_t ix, std::int64_t iy) const;
 
   FreeSpaceConfig config_;
-  std::int64_t cells_per_side_ = 0;
   std::int64_t tiles_per_side_ = 0;
-  Eigen::Vector2d origin_ = Eigen::Vector2d::Zero();  // Corner of the window.
+  /// Cells written are within this many cells of the sensor's cell (half a window less a tile): a
+  /// tile and the one that shares its slot are never both within reach.
+  std::int64_t reach_cells_ = 0;
+  Eigen::Vector2d anchor_ = Eigen::Vector2d::Zero();  // Corner of cell (0, 0).
   bool placed_ = false;
+  std::uint32_t generation_ = 1;
+  std::int64_t sensor_ix_ = 0;  // The latest sensor position's cell.
+  std::int64_t sensor_iy_ = 0;
   std::uint32_t scans_ = 0;
   double stamp_s_ = 0.0;  // Of the latest scan.
   double epoch_s_ = 0.0;  // Cells keep their stamps relative to this (the first scan's stamp).
-  std::vector<Cell> cells_;
+  std::unique_ptr<Cell[]> cells_;  // tiles_per_side_^2 slots of kTileCells cells.
+  std::vector<TileTag> tags_;      // Per slot.
+  std::int64_t tiles_started_ = 0;
   std::vector<double> free_until_;           // Scratch: per beam, how far it saw free space.
   std::vector<Eigen::Vector2d> directions_;  // Scratch: per beam, its direction.
   BeamDirections beam_directions_;           // The scanner's beam directions (sensor frame).

@@ -70,9 +70,12 @@ class ScanFilterRunner {
   const FilterResult& process(const LaserScan& scan, double stated_period_s,
                               const std::optional<Pose2>& sensor_pose);
 
-  /// What the last process() did, and how long it took (s).
+  /// What the last process() did, and how long it took (s): wall time, and the CPU time of the
+  /// calling thread (less than the wall time when the thread was preempted: a slow scan that did
+  /// ordinary work was kept waiting by the machine, not by the filter).
   ScanOutcome last_outcome() const { return last_outcome_; }
   double last_time_s() const { return times_.last_s; }
+  double last_cpu_time_s() const { return last_cpu_s_; }
 
   /// The configuration in use; before the first scan under scale_to_scanner, the unscaled one.
   const DynamicFilterConfig& config() const;
@@ -102,6 +105,7 @@ class ScanFilterRunner {
   ScanFilterCounts counts_;
   ScanTimes times_;
   double times_sum_s_ = 0.0;
+  double last_cpu_s_ = 0.0;
 };
 
 }  // namespace dispel::pipeline

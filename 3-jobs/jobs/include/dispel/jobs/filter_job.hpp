@@ -34,6 +34,16 @@ struct FilterJobOptions {
 };
 
 /// What the job did.
+/// One of the scans that cost the most CPU time, and what the filter did for it.
+struct SlowScan {
+  std::int64_t index = 0;  ///< 0-based, among the scans seen.
+  double stamp_s = 0.0;
+  double time_s = 0.0;      ///< Wall time.
+  double cpu_time_s = 0.0;  ///< CPU time of the filtering thread.
+  FilterEvent event = FilterEvent::kFiltered;
+  ScanWork work;
+};
+
 struct FilterJobStats {
   bool laser_only = false;          ///< Filtered without odometry (registered scans only).
   std::string input_format;         ///< "rosbag", "MRPT rawlog" or "carmen".
@@ -45,8 +55,12 @@ struct FilterJobStats {
   /// at the scan's stamp), waiting_for_scan_period (--scale-to-scanner, the first scans of a
   /// scanner that states no period).
   std::map<std::string, std::int64_t> scans_skipped;
-  FilterCounters counters;          ///< The filter's own counters.
-  std::vector<double> scan_time_s;  ///< Processing time of each scan, seconds.
+  FilterCounters counters;              ///< The filter's own counters.
+  std::vector<double> scan_time_s;      ///< Processing time of each scan (wall), seconds.
+  std::vector<double> scan_cpu_time_s;  ///< The same in CPU time of the filtering thread.
+  /// The kSlowScansKept scans that cost the most CPU time, the costliest first.
+  std::vector<SlowScan> slowest_scans;
+  static constexpr std::size_t kSlowScansKept = 5;
   /// Per registered scan (registration on): RMS point-to-line residual (m), share of points
   /// with a correspondence, and degeneracy (weakest / strongest translation information).
   std::vector<double> registration_residual_m;

@@ -11,9 +11,10 @@ set(rows 0)
 set(scans 0)
 set(number "[0-9]+[.]?[0-9]*")
 foreach(line ${lines})
-  # sim_h scans rss_MiB filt_med filt_p99 filt_p999 filt_max tracks trk_mx voxels odom_med
-  # odom_p99 removed
-  if(line MATCHES "^ *(${number}) +([0-9]+) +(${number}) +${number} +${number} +${number} +${number} +[0-9]+ +[0-9]+ +[0-9]+ +${number} +${number} +(${number}) *$")
+  # sim_h scans rss_MiB filt_med filt_p99 filt_p999 filt_max cpu_med cpu_p99 tracks trk_mx voxels
+  # odom_med odom_p99 removed
+  set(times "${number} +${number} +${number} +${number} +${number} +${number}")
+  if(line MATCHES "^ *(${number}) +([0-9]+) +(${number}) +${times} +[0-9]+ +[0-9]+ +[0-9]+ +${number} +${number} +(${number}) *$")
     math(EXPR rows "${rows} + 1")
     set(hours "${CMAKE_MATCH_1}")
     set(row_scans "${CMAKE_MATCH_2}")
@@ -36,7 +37,7 @@ endif()
 if(NOT hours STREQUAL "0.050")
   message(FATAL_ERROR "the last row ends at ${hours} h, expected 0.050:\n${so}")
 endif()
-if(NOT so MATCHES "\nverdict: RSS (flat|GROWING) .* p99 (flat|GROWING) ")
+if(NOT so MATCHES "\nverdict: RSS (flat|GROWING) .* p99 (flat|GROWING) .* CPU p99 (flat|GROWING) ")
   message(FATAL_ERROR "no verdict line:\n${so}")
 endif()
 if(NOT so MATCHES "peak RSS [0-9.]+ MiB")

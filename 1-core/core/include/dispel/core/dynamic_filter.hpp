@@ -162,9 +162,6 @@ class DynamicFilter {
   const DynamicFilterConfig& config() const { return config_; }
   const FilterCounters& counters() const { return counters_; }
   std::size_t track_count() const { return tracks_.size(); }
-  /// Voxels of the registration's local map (0 with the registration off); voxels beyond
-  /// local_map_radius_m are forgotten, so it stays bounded however long the filter runs.
-  std::size_t map_voxel_count() const { return registration_.voxel_count(); }
 
  private:
   // The three tracked points of an object: first edge, last edge, centroid.

@@ -85,9 +85,6 @@ class ScanFilterRunner {
   /// filter needs none and none is learnt).
   std::optional<double> scan_period_s() const { return period_.period(); }
   const ScanFilterCounts& counts() const { return counts_; }
-  /// Voxels of the filter's registered local map (0 before the first filtered scan, or with the
-  /// registration off).
-  std::size_t map_voxel_count() const { return filter_ ? filter_->map_voxel_count() : 0; }
   /// The filter's own counters (zero before the first filtered scan).
   FilterCounters filter_counters() const;
   /// Processing times since the previous call; resets them.

@@ -19,6 +19,7 @@
 #include <iostream>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -127,6 +128,13 @@ int run(const Options& o) {
   dispel::pipeline::OdometryRunner fusion(odometry.filter, 0.0);
 
   const double duration_s = o.hours * 3600.0;
+  // The simulator's stamps are a bag's, 32-bit seconds (sim::run_duration would name --duration).
+  if (!(scenario.start_time_s + duration_s < 4294967295.0)) {
+    throw std::invalid_argument(
+        "--hours must keep the stamps below 2^32 s: at most " +
+        std::to_string(static_cast<long long>((4294967295.0 - scenario.start_time_s) / 3600.0)) +
+        " h from this scenario's start");
+  }
   const auto periods = std::max<std::int64_t>(
       1, static_cast<std::int64_t>(std::ceil(duration_s / o.report_every_s - 1e-9)));
   const double scan_period_s = 1.0 / scenario.lidar.rate_hz;

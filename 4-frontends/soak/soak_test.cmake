@@ -52,6 +52,12 @@ foreach(case "--hours;0" "--hours;nan" "--report-every-s;-1" "--frob")
     message(FATAL_ERROR "'dispel_soak ${case}': expected exit 2 and one line, got ${rc}:\n${se}")
   endif()
 endforeach()
+execute_process(COMMAND ${SOAK} --hours 2e6 RESULT_VARIABLE rc OUTPUT_VARIABLE so ERROR_VARIABLE se)
+string(STRIP "${se}" line)
+if(NOT rc EQUAL 1 OR NOT line MATCHES "^dispel_soak: --hours must keep the stamps below 2\\^32 s"
+   OR line MATCHES "\n")
+  message(FATAL_ERROR "--hours 2e6: expected exit 1 and one line, got ${rc}:\n${se}")
+endif()
 execute_process(COMMAND ${SOAK} --scenario ${SOURCE_DIR}/no_such.yaml
                 RESULT_VARIABLE rc OUTPUT_VARIABLE so ERROR_VARIABLE se)
 string(STRIP "${se}" line)

@@ -356,6 +356,18 @@ expect_refused(2 "^dispel sim: --duration: must be a finite number > 0, got nan 
 expect_refused(2 "^dispel sim: --duration: must be a finite number > 0, got -1 " ${WORK_DIR}/x.bag
                ${DISPEL} sim ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml -o ${WORK_DIR}/x.bag
                --duration -1)
+# dispel sim streams the run into the bag (memory does not grow with the duration), but a run
+# whose bag would not fit on the disk is refused before any work: one line naming the duration
+# and both sizes, exit 1, no output (a run of 1e9 s would take years: the timeout would show it).
+string(TIMESTAMP before "%s")
+expect_refused(1 "^dispel sim: --duration 1e\\+09 s would write a bag of about [0-9.]+ [PT]B, but '.*' has [0-9.]+ [a-zA-Z]+ free$"
+               ${WORK_DIR}/x.bag ${DISPEL} sim ${SOURCE_DIR}/config/scenarios/thesis_hall.yaml
+               -o ${WORK_DIR}/x.bag --duration 1e9)
+string(TIMESTAMP after "%s")
+math(EXPR took "${after} - ${before}")
+if(took GREATER 10)
+  message(FATAL_ERROR "dispel sim --duration 1e9 took ${took} s to be refused: it did work first")
+endif()
 expect_refused(2 "^dispel render: --from: 'inf' is not a finite number" ${WORK_DIR}/x.png
                ${DISPEL} render ${BAG} -o ${WORK_DIR}/x.png --from inf)
 expect_refused(2 "^dispel filter: .*--output is required" ${out} ${DISPEL} filter ${BAG})

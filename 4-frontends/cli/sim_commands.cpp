@@ -25,18 +25,17 @@ int run_sim(const SimOptions& o) {
   const Interrupts interrupts;  // Ctrl-C: stop and remove OUT.bag.partial.
   try {
     const sim::Scenario scenario = io::load_scenario(o.scenario);
-    const sim::SimulationOutput run = sim::simulate(scenario, o.seed, o.duration_s);
-    jobs::write_simulation(run, scenario, o.output, interrupts.flag());
-    std::int64_t counts[4] = {0, 0, 0, 0};
-    for (const sim::ScanFrame& f : run.scans) {
-      for (sim::Truth t : f.truth) ++counts[static_cast<int>(t)];
-    }
+    // Streamed: each scan and sample is written as it is made, so memory does not grow with
+    // the duration; a run whose bag would not fit on the disk is refused before any work.
+    const jobs::SimulationSummary run =
+        jobs::simulate_to_recording(scenario, o.seed, o.duration_s, o.output, interrupts.flag());
     std::printf(
-        "dispel sim: %s, seed %llu: %zu scans, %d actors; beams: %lld static, %lld moving, %lld "
+        "dispel sim: %s, seed %llu: %lld scans, %d actors; beams: %lld static, %lld moving, %lld "
         "still actors, %lld no return\nwrote %s\n",
-        scenario.name.c_str(), static_cast<unsigned long long>(o.seed), run.scans.size(),
-        run.actor_count, static_cast<long long>(counts[0]), static_cast<long long>(counts[1]),
-        static_cast<long long>(counts[2]), static_cast<long long>(counts[3]), o.output.c_str());
+        scenario.name.c_str(), static_cast<unsigned long long>(o.seed),
+        static_cast<long long>(run.scans), run.actor_count, static_cast<long long>(run.beams[0]),
+        static_cast<long long>(run.beams[1]), static_cast<long long>(run.beams[2]),
+        static_cast<long long>(run.beams[3]), o.output.c_str());
     return 0;
   } catch (const jobs::JobCancelled&) {
     std::cerr << "dispel sim: interrupted; " << error_line(o.output) << " was not written\n";

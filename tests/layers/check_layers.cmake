@@ -22,7 +22,8 @@ set(rooms
   "3-jobs/slam|core sim eval pipeline io jobs slam|ros/ rosbag/ sensor_msgs/ cairo"
   "4-frontends/ros1|core pipeline io ros1|rosbag/ cairo mrpt/"
   "4-frontends/cli|core sim eval pipeline io jobs render slam|ros/ rosbag/"
-  "4-frontends/bench|core sim eval pipeline|ros/ rosbag/")
+  "4-frontends/bench|core sim eval pipeline|ros/ rosbag/"
+  "4-frontends/soak|core sim pipeline io|ros/ rosbag/ cairo mrpt/")
 # Headers of a room that a room above may not use even though its layer is below (the ROS 1 bag
 # library is for the jobs' recordings, not for a live node).
 set(ros1_forbidden_headers "dispel/io/ros1_bag.hpp" "dispel/io/mrpt_rawlog.hpp")

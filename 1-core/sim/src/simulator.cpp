@@ -233,14 +233,23 @@ double incidence_cosine(const World& world, std::int32_t id, const Eigen::Vector
   return std::max(0.1, std::abs(normal.dot(direction)) / norm);
 }
 
-// The simulator holds the whole run in memory before it is written: per scan its ranges, truth
-// and actor per beam, per sensor sample one SensorSample. A run that would hold more than
-// kMaxHeldRunBytes is refused before any work, naming @p field (the scenario's duration or the
-// command line's --duration) and the longest duration that fits.
+// Any run: a finite duration > 0 whose stamps a bag can hold (32-bit seconds). @p field names the
+// duration (the scenario's duration_s or the command line's --duration).
+void check_duration(const Scenario& s, double duration_s, const std::string& field) {
+  if (!(duration_s > 0.0 && std::isfinite(duration_s))) reject(field, duration_s, "finite and > 0");
+  if (!(s.start_time_s + duration_s < 4294967295.0)) {
+    reject(field, duration_s,
+           "such that start_time_s + duration_s < 2^32 s (a bag's stamps are 32-bit seconds)");
+  }
+}
+
+// The held form of simulate() keeps the whole run in memory: per scan its ranges, truth and
+// actor per beam, per sensor sample one SensorSample. A run that would hold more than
+// kMaxHeldRunBytes is refused before any work, naming @p field and the longest duration that
+// fits. (The streamed form holds nothing of the run and has no such bound.)
 constexpr double kMaxHeldRunBytes = 4.0 * 1024 * 1024 * 1024;
 
-void check_run_size(const Scenario& s, double duration_s, const std::string& field) {
-  if (!(duration_s > 0.0 && std::isfinite(duration_s))) reject(field, duration_s, "finite and > 0");
+void check_held_run_size(const Scenario& s, double duration_s, const std::string& field) {
   const double beams = static_cast<double>(lidar_geometry(s.lidar).beam_count);
   const double per_scan =
       beams * static_cast<double>(sizeof(float) + sizeof(Truth) + sizeof(std::int32_t)) +
@@ -253,10 +262,6 @@ void check_run_size(const Scenario& s, double duration_s, const std::string& fie
     rule << "at most " << static_cast<long long>(std::floor(longest))
          << " s for this scanner and rates (the run is held in memory, at most 4 GiB)";
     reject(field, duration_s, rule.str().c_str());
-  }
-  // A bag's stamps are 32-bit seconds.
-  if (!(s.start_time_s + duration_s < 4294967295.0)) {
-    reject("start_time_s", s.start_time_s, "such that start_time_s + duration_s < 2^32 s");
   }
 }
 
@@ -354,7 +359,7 @@ void Scenario::validate() const {
   if (static_cast<double>(actors.size()) + random_people.count > kMaxPeople) {
     reject("random_people.count", random_people.count, "at most 10000 people with the actors");
   }
-  check_run_size(*this, duration_s, "duration_s");
+  check_duration(*this, duration_s, "duration_s");
   if (random_people.count > 0 &&
       !(random_people.area_max.array() > random_people.area_min.array()).all()) {
     throw std::invalid_argument("random_people.area must have max > min in x and y");
@@ -384,8 +389,30 @@ std::vector<Segment> rectangle_edges(const Rectangle& r) {
 
 SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double duration_s) {
   scenario.validate();
-  const double duration = duration_s > 0.0 ? duration_s : scenario.duration_s;
-  if (duration_s > 0.0) check_run_size(scenario, duration, "--duration");
+  const bool given = !(duration_s <= 0.0);  // NaN too: refused below.
+  const double duration = given ? duration_s : scenario.duration_s;
+  const std::string field = given ? "--duration" : "duration_s";
+  check_duration(scenario, duration, field);
+  check_held_run_size(scenario, duration, field);
+  SimulationOutput out;
+  SimulationSink sink;
+  sink.scan = [&out](ScanFrame&& frame) { out.scans.push_back(std::move(frame)); };
+  sink.sensor = [&out](const SensorSample& sample) { out.sensors.push_back(sample); };
+  out.actor_count = simulate(scenario, seed, duration_s, sink);
+  return out;
+}
+
+double run_duration(const Scenario& scenario, double duration_s) {
+  scenario.validate();
+  const bool given = !(duration_s <= 0.0);  // NaN too: refused.
+  if (!given) return scenario.duration_s;
+  check_duration(scenario, duration_s, "--duration");
+  return duration_s;
+}
+
+std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double duration_s,
+                      const SimulationSink& sink) {
+  const double duration = run_duration(scenario, duration_s);
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> n01(0.0, 1.0);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
@@ -428,6 +455,7 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
     }
     a.speed_mps = rp.min_speed_mps + u01(rng) * (rp.max_speed_mps - rp.min_speed_mps);
     a.pause_s = u01(rng) * rp.max_pause_s;
+    a.loop = rp.loop;
     specs.push_back(a);
   }
   for (const Actor& a : specs) {
@@ -480,8 +508,7 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
     }
   }
 
-  SimulationOutput out;
-  out.actor_count = static_cast<std::int32_t>(actors.size());
+  const auto actor_count = static_cast<std::int32_t>(actors.size());
   OdometrySensors sensors(scenario.sensors, scenario.robot.wheel_base_m, rng);
   sensors.start_at(pose);
   const auto steps = static_cast<std::int64_t>(std::floor(duration / kStep + 1e-9));
@@ -537,14 +564,16 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
   for (std::int64_t step = 0; step <= steps; ++step) {
     const double t = scenario.start_time_s + static_cast<double>(step) * kStep;
     // Sensors and scans see the state at t; then the world moves on by one step.
-    if (step % sensor_every == 0) {
-      SensorSample s;
-      s.stamp_s = t;
-      s.true_pose = pose;
-      s.true_v_mps = v;
-      s.true_w_radps = w;
-      sensors.measure(t, static_cast<double>(sensor_every) * kStep, v, w, s);
-      out.sensors.push_back(s);
+    // The sample is measured before the scan is cast (the order the noise is drawn in) and
+    // handed on after it: at the same instant the scan comes first.
+    const bool sample_now = step % sensor_every == 0;
+    SensorSample sample;
+    if (sample_now) {
+      sample.stamp_s = t;
+      sample.true_pose = pose;
+      sample.true_v_mps = v;
+      sample.true_w_radps = w;
+      sensors.measure(t, static_cast<double>(sensor_every) * kStep, v, w, sample);
     }
     if (step % scan_every == 0) {
       World world = base;
@@ -619,8 +648,9 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
           frame.actor[i] = actor + 1;
         }
       }
-      out.scans.push_back(std::move(frame));
+      if (sink.scan) sink.scan(std::move(frame));
     }
+    if (sample_now && sink.sensor) sink.sensor(sample);
 
     // Robot: steer toward the next waypoint, slow down while turning; its motors change speed
     // and turn rate at most kMaxAcceleration and kMaxAngularAcceleration.
@@ -673,7 +703,7 @@ SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double d
       if (s.path.advance_if_reached(s.position, 1e-6)) s.pause_left = s.spec.pause_s;
     }
   }
-  return out;
+  return actor_count;
 }
 
 }  // namespace dispel::sim

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <set>
 
@@ -99,6 +100,106 @@ TEST(Simulator, SameSeedSameOutputAndOtherSeedsDiffer) {
     differ = a.scans[k].truth != c.scans[k].truth;
   }
   EXPECT_TRUE(differ);
+}
+
+TEST(Simulator, AStreamedRunIsTheHeldRunInTimeOrder) {
+  Scenario s = room_with_walker();
+  s.lidar.range_noise_m = 0.01;
+  s.lidar.dropout = 0.01;
+  s.robot.speed_mps = 0.5;
+  s.robot.waypoints = {{1.0, 0.0}, {1.0, 1.0}, {0.0, 1.0}};
+  s.random_people = {3, {-4, -4}, {4, 4}, 0.5, 1.5, 2.0, 4};
+  const SimulationOutput held = simulate(s, 7);
+  // The stream as it comes: (stamp, 0 for a scan or 1 for a sensor sample, index in its kind).
+  std::vector<ScanFrame> scans;
+  std::vector<SensorSample> sensors;
+  std::vector<std::pair<double, int>> order;
+  SimulationSink sink;
+  sink.scan = [&](ScanFrame&& f) {
+    order.emplace_back(f.scan.stamp_s, 0);
+    scans.push_back(std::move(f));
+  };
+  sink.sensor = [&](const SensorSample& x) {
+    order.emplace_back(x.stamp_s, 1);
+    sensors.push_back(x);
+  };
+  const std::int32_t actors = simulate(s, 7, 0.0, sink);
+  EXPECT_EQ(actors, held.actor_count);
+  EXPECT_EQ(actors, 4);
+  ASSERT_EQ(scans.size(), held.scans.size());
+  ASSERT_EQ(sensors.size(), held.sensors.size());
+  ASSERT_EQ(scans.size(), 121u);
+  ASSERT_EQ(sensors.size(), 301u);
+  // In time order; at the same instant the scan before the sensor sample.
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    ASSERT_LE(order[k - 1], order[k]) << k;
+  }
+  bool moving_seen = false;
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    const ScanFrame& a = scans[k];
+    const ScanFrame& b = held.scans[k];
+    ASSERT_EQ(a.scan.ranges_m.size(), b.scan.ranges_m.size());
+    ASSERT_EQ(0, std::memcmp(a.scan.ranges_m.data(), b.scan.ranges_m.data(),
+                             a.scan.ranges_m.size() * sizeof(float)));
+    ASSERT_EQ(a.scan.stamp_s, b.scan.stamp_s);
+    ASSERT_EQ(a.truth, b.truth);
+    ASSERT_EQ(a.actor, b.actor);
+    ASSERT_EQ(a.base_pose.translation(), b.base_pose.translation());
+    ASSERT_EQ(a.base_pose.yaw_rad, b.base_pose.yaw_rad);
+    moving_seen = moving_seen || std::count(a.truth.begin(), a.truth.end(), Truth::kMoving) > 0;
+  }
+  EXPECT_TRUE(moving_seen);
+  for (std::size_t k = 0; k < sensors.size(); ++k) {
+    const SensorSample& a = sensors[k];
+    const SensorSample& b = held.sensors[k];
+    ASSERT_EQ(a.stamp_s, b.stamp_s);
+    ASSERT_EQ(a.wheel_left_mps, b.wheel_left_mps);
+    ASSERT_EQ(a.wheel_right_mps, b.wheel_right_mps);
+    ASSERT_EQ(a.imu_yaw_rate_radps, b.imu_yaw_rate_radps);
+    ASSERT_EQ(a.odom_pose.translation(), b.odom_pose.translation());
+    ASSERT_EQ(a.odom_pose.yaw_rad, b.odom_pose.yaw_rad);
+    ASSERT_EQ(a.true_pose.translation(), b.true_pose.translation());
+    ASSERT_EQ(a.true_v_mps, b.true_v_mps);
+    ASSERT_EQ(a.true_w_radps, b.true_w_radps);
+  }
+}
+
+// A day-long run must not empty the hall: the random people walk their waypoints round and
+// round, so that in every minute of a long run people are seen moving.
+TEST(Simulator, RandomPeopleKeepComingAndGoing) {
+  Scenario s;
+  s.world.walls = {{{-10, -10}, {10, -10}},
+                   {{10, -10}, {10, 10}},
+                   {{10, 10}, {-10, 10}},
+                   {{-10, 10}, {-10, -10}}};
+  s.robot.speed_mps = 0.0;
+  s.lidar.fov_deg = 360.0;
+  s.lidar.resolution_deg = 1.0;
+  s.lidar.rate_hz = 2.0;
+  s.sensors.rate_hz = 1.0;
+  s.random_people = {4, {-8, -8}, {8, 8}, 0.5, 1.5, 3.0, 3};
+  constexpr int kMinutes = 10;
+  std::vector<std::set<std::int32_t>> moving_per_minute(kMinutes);
+  SimulationSink sink;
+  sink.scan = [&](ScanFrame&& f) {
+    const auto minute = static_cast<std::size_t>((f.scan.stamp_s - s.start_time_s) / 60.0);
+    if (minute >= moving_per_minute.size()) return;
+    for (std::size_t i = 0; i < f.truth.size(); ++i) {
+      if (f.truth[i] == Truth::kMoving) moving_per_minute[minute].insert(f.actor[i]);
+    }
+  };
+  ASSERT_EQ(simulate(s, 5, kMinutes * 60.0, sink), 4);
+  for (int m = 0; m < kMinutes; ++m) {
+    // Every one of the four walked in every minute (a pause is at most 3 s).
+    EXPECT_EQ(moving_per_minute[static_cast<std::size_t>(m)].size(), 4u) << "minute " << m;
+  }
+  // With loop: false each walks its three waypoints once (at most 3 x 16 m): the hall is still
+  // by the last minute.
+  s.random_people.loop = false;
+  for (auto& seen : moving_per_minute) seen.clear();
+  ASSERT_EQ(simulate(s, 5, kMinutes * 60.0, sink), 4);
+  EXPECT_EQ(moving_per_minute.front().size(), 4u);
+  EXPECT_TRUE(moving_per_minute.back().empty());
 }
 
 TEST(Simulator, MaskedSectorsAndTheRangeLimitReturnNothing) {
@@ -299,22 +400,32 @@ TEST(Scenario, BadValuesAreRejectedByName) {
       EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
     }
   };
-  // What cannot finish is refused before any work, naming the key and the limit: the run is held
-  // in memory (the thesis's scanner at 20 Hz: about 4 h in 4 GiB), people are ray-cast per beam.
+  // What cannot finish is refused before any work, naming the key and the limit: stamps past
+  // 2^32 s, people ray-cast per beam; the held run also by its memory (the thesis's scanner at
+  // 20 Hz: about 4 h in 4 GiB), the streamed one not.
   s = Scenario{};
-  s.duration_s = 1e9;
+  s.duration_s = 5e9;
   expect_named(s, "duration_s");
   s.duration_s = std::numeric_limits<double>::infinity();
   expect_named(s, "duration_s");
-  s.duration_s = 3600.0;  // An hour fits.
+  s.duration_s = 1e9;  // Streamed, any duration whose stamps a bag holds.
   EXPECT_NO_THROW(s.validate());
-  try {
-    simulate(s, 1, 1e9);
-    ADD_FAILURE() << "--duration 1e9 accepted";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("--duration"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("at most"), std::string::npos) << e.what();
-  }
+  const auto expect_refused = [](const std::function<void()>& run, const std::string& field,
+                                 const std::string& rule) {
+    try {
+      run();
+      ADD_FAILURE() << field << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(field + " must be ", 0), 0u) << e.what();
+      EXPECT_NE(std::string(e.what()).find(rule), std::string::npos) << e.what();
+    }
+  };
+  expect_refused([&] { simulate(s, 1); }, "duration_s", "held in memory, at most 4 GiB");
+  s.duration_s = 60.0;
+  expect_refused([&] { simulate(s, 1, 1e9); }, "--duration", "held in memory, at most 4 GiB");
+  expect_refused([&] { simulate(s, 1, 5e9, SimulationSink{}); }, "--duration", "< 2^32 s");
+  expect_refused([&] { simulate(s, 1, std::nan(""), SimulationSink{}); }, "--duration",
+                 "finite and > 0");
   s = Scenario{};
   s.random_people.count = 1000000;
   s.random_people.area_max = {10.0, 10.0};

@@ -263,7 +263,7 @@ void read_actors(const Reader& r, const YAML::Node& n, std::vector<sim::Actor>& 
 }
 
 void read_random_people(const Reader& r, const YAML::Node& n, sim::RandomPeople& p) {
-  r.keys(n, "random_people", {"count", "area", "speed_mps", "max_pause_s", "waypoints"});
+  r.keys(n, "random_people", {"count", "area", "speed_mps", "max_pause_s", "waypoints", "loop"});
   if (n["count"]) p.count = r.integer(n["count"], "random_people.count");
   if (n["area"]) {
     const auto a = r.numbers(n["area"], "random_people.area", 4);
@@ -277,6 +277,7 @@ void read_random_people(const Reader& r, const YAML::Node& n, sim::RandomPeople&
   }
   if (n["max_pause_s"]) p.max_pause_s = r.number(n["max_pause_s"], "random_people.max_pause_s");
   if (n["waypoints"]) p.waypoints = r.integer(n["waypoints"], "random_people.waypoints");
+  if (n["loop"]) p.loop = r.boolean(n["loop"], "random_people.loop");
 }
 
 }  // namespace

@@ -131,7 +131,9 @@ struct Actor {
   double width_m = 0.8;
 };
 
-/// People generated from the seed: each walks between random points of the area.
+/// People generated from the seed: each walks between random points of the area, by default
+/// round and round (back to its first point after the last), so that people keep coming and
+/// going however long the run.
 struct RandomPeople {
   int count = 0;
   Eigen::Vector2d area_min = Eigen::Vector2d::Zero();
@@ -140,6 +142,8 @@ struct RandomPeople {
   double max_speed_mps = 1.5;
   double max_pause_s = 3.0;
   int waypoints = 6;
+  /// false: each walks its waypoints once and then stands at the last.
+  bool loop = true;
 };
 
 struct Scenario {

@@ -4,6 +4,7 @@
 /// among walls and moving people and carts, with exact ground truth per beam.
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "dispel/core/laser_scan.hpp"
@@ -48,10 +49,31 @@ struct SimulationOutput {
   std::int32_t actor_count = 0;  ///< Scripted and generated actors.
 };
 
+/// Where a streamed run goes: each scan and each sensor sample as it is made, in time order (at
+/// the same instant the scan first, then the sensor sample). Either may be empty (not wanted);
+/// either may throw to stop the run (the exception comes out of simulate()).
+struct SimulationSink {
+  std::function<void(ScanFrame&&)> scan;
+  std::function<void(const SensorSample&)> sensor;
+};
+
 /// Runs @p scenario for @p duration_s (the scenario's own duration if <= 0) with noise drawn from
-/// @p seed. The same scenario and seed give the same output. @throws std::invalid_argument if
-/// scenario.validate() does.
+/// @p seed, handing every scan and sensor sample to @p sink as it is made: nothing of the run is
+/// held, so any duration whose stamps a bag can hold runs in the same memory. The same scenario
+/// and seed give the same stream. Returns the number of actors (scripted and generated).
+/// @throws std::invalid_argument if scenario.validate() does, or naming "--duration" for a
+/// @p duration_s that is not finite or whose stamps reach 2^32 s.
+std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double duration_s,
+                      const SimulationSink& sink);
+
+/// The same run held in memory: the stream above collected (the same scans and samples). A run
+/// that would hold more than 4 GiB is refused before any work, naming duration_s (or
+/// "--duration") and the longest duration that fits. @throws std::invalid_argument
 SimulationOutput simulate(const Scenario& scenario, std::uint64_t seed, double duration_s = 0.0);
+
+/// How long a run of @p duration_s lasts (the scenario's own duration if <= 0), checked as
+/// simulate() checks it before any work. @throws std::invalid_argument as the streamed simulate()
+double run_duration(const Scenario& scenario, double duration_s);
 
 /// The laser's beams for @p lidar (angle_min, increment, count, limits).
 ScanGeometry lidar_geometry(const LidarConfig& lidar);

@@ -265,7 +265,115 @@ Chunk check_chunk(Checker& c, FileSource& file, const Record& r) {
   return chunk;
 }
 
+// Walks a serialised ROS 1 message: every length checked against the bytes left.
+class MessageWalker {
+ public:
+  MessageWalker(const std::string& what, const std::uint8_t* data, std::size_t size)
+      : what_(what), data_(data), size_(size) {}
+
+  void skip(std::uint64_t n, const char* field) {
+    if (n > left()) {
+      throw InputError(one_line(what_ + ": " + field + " of " + bytes(n) +
+                                " runs past the end of the message (" + bytes(left()) + " left)"));
+    }
+    pos_ += static_cast<std::size_t>(n);
+  }
+  std::uint32_t length(const char* field) {
+    if (left() < 4) skip(4, field);
+    std::uint32_t n = 0;
+    std::memcpy(&n, data_ + pos_, 4);
+    pos_ += 4;
+    return n;
+  }
+  void string(const char* field) { skip(length(field), field); }
+  void header() {
+    skip(12, "a header's seq and stamp");
+    string("a header's frame_id");
+  }
+  // An array of @p count values of @p value_size bytes each (its length read first).
+  void array(std::uint64_t value_size, const char* field) {
+    const std::uint64_t n = length(field);
+    if (n * value_size > left()) {
+      throw InputError(one_line(what_ + ": an array of " + std::to_string(n) + " " +
+                                std::to_string(value_size) + "-byte values (" + field +
+                                ") runs past the end of the message (" + bytes(left()) +
+                                " left)"));
+    }
+    pos_ += static_cast<std::size_t>(n * value_size);
+  }
+  // The length of an array of values of at least @p min_size bytes each, checked.
+  std::uint32_t count(std::uint64_t min_size, const char* field) {
+    const std::uint32_t n = length(field);
+    if (n * min_size > left()) {
+      throw InputError(one_line(what_ + ": an array of " + std::to_string(n) + " " + field +
+                                " (at least " + bytes(min_size) +
+                                " each) runs past the end of the message (" + bytes(left()) +
+                                " left)"));
+    }
+    return n;
+  }
+
+ private:
+  std::uint64_t left() const { return size_ - pos_; }
+  const std::string& what_;
+  const std::uint8_t* data_;
+  std::size_t size_;
+  std::size_t pos_ = 0;
+};
+
 }  // namespace
+
+void check_message_lengths(const std::string& path, const std::string& topic, Stamp time,
+                           MessageKind kind, const std::uint8_t* data, std::size_t size) {
+  char at[48];
+  std::snprintf(at, sizeof at, "%lld.%09u s", static_cast<long long>(time.sec), time.nsec);
+  const std::string what = path + ": corrupt bag: message at " + at + " on " + quote(topic) +
+                           " (" + message_kind_name(kind) + ")";
+  MessageWalker w(what, data, size);
+  constexpr std::uint64_t kDouble = 8;
+  switch (kind) {
+    case MessageKind::kLaserScan:
+      w.header();
+      w.skip(7 * 4, "the angles, times and range limits");
+      w.array(4, "ranges");
+      w.array(4, "intensities");
+      break;
+    case MessageKind::kOdometry:
+      w.header();
+      w.string("child_frame_id");
+      w.skip((7 + 36 + 6 + 36) * kDouble, "the pose and twist with their covariances");
+      break;
+    case MessageKind::kTransforms: {
+      // A TransformStamped: a header (at least 16 bytes), child_frame_id (at least 4), 7 doubles.
+      const std::uint32_t n = w.count(16 + 4 + 7 * kDouble, "transforms");
+      for (std::uint32_t i = 0; i < n; ++i) {
+        w.header();
+        w.string("child_frame_id");
+        w.skip(7 * kDouble, "a transform");
+      }
+      break;
+    }
+    case MessageKind::kJointState: {
+      w.header();
+      const std::uint32_t n = w.count(4, "joint names");
+      for (std::uint32_t i = 0; i < n; ++i) w.string("a joint name");
+      w.array(kDouble, "position");
+      w.array(kDouble, "velocity");
+      w.array(kDouble, "effort");
+      break;
+    }
+    case MessageKind::kImu:
+      w.header();
+      w.skip((4 + 9 + 3 + 9 + 3 + 9) * kDouble, "the orientation, rates and accelerations");
+      break;
+    case MessageKind::kNavSatFix:
+      w.header();
+      w.skip(1 + 2 + (3 + 9) * kDouble + 1, "the status, position and covariance");
+      break;
+    case MessageKind::kOther:
+      break;  // Never decoded.
+  }
+}
 
 void check_bag_structure(const std::string& path) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);

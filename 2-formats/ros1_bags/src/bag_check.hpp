@@ -3,7 +3,11 @@
 // dispel::io_ros1_bags). The bag library trusts every length and offset in a bag: a corrupt one
 // made it read outside its buffers (SIGSEGV) or allocate without bound.
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
+
+#include "dispel/io/recording.hpp"
 
 namespace dispel::io {
 
@@ -15,5 +19,14 @@ namespace dispel::io {
 /// to the bag library.
 /// @throws InputError "<path>: corrupt bag: record at byte N: <what is wrong>"
 void check_bag_structure(const std::string& path);
+
+/// Checks the lengths inside the serialised message @p data (@p size bytes) of a kind dispel
+/// decodes, before the ROS deserialiser reads it: that deserialiser sizes an array by its length
+/// field before it checks that the message holds it (a length of 2^32 - 1 floats allocated
+/// 16 GiB). Every string and array must fit in what is left of the message.
+/// @throws InputError "<path>: corrupt bag: message at <time> on <topic> (<type>): an array of
+///         N 4-byte values runs past the end of the message (M bytes left)"
+void check_message_lengths(const std::string& path, const std::string& topic, Stamp time,
+                           MessageKind kind, const std::uint8_t* data, std::size_t size);
 
 }  // namespace dispel::io

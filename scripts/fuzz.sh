@@ -7,6 +7,7 @@
 # files targets.txt names), in build-fuzz/corpus/<target>/. Prints one line per target (runs,
 # result); a crash, leak, timeout (10 s) or out-of-memory (4 GiB) leaves its input in
 # build-fuzz/artifacts/<target>/, is printed with its path, and makes the script exit 1.
+# tests/fuzz/<target>.dict, when there is one, is the target's libFuzzer dictionary.
 # Replay one: build-fuzz/tests/fuzz/fuzz_<target> <input>.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -52,12 +53,14 @@ for t in "${targets[@]}"; do
     find "$p" -maxdepth 1 -type f ! -name LICENSE -exec cp {} "$corpus"/ \;
   done
   echo "fuzz: $t for $seconds s on $(find "$corpus" -type f | wc -l) seeds (log: $log)"
+  dict=()
+  [ -f "tests/fuzz/$t.dict" ] && dict=(-dict="tests/fuzz/$t.dict")
   rc=0
   # Leaks are checked (ASan's default); -error_exitcode is libFuzzer's for any finding.
   ASAN_OPTIONS=abort_on_error=0:detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
     "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
     -max_len="${max_len[$t]}" -artifact_prefix="$artifacts/" -print_final_stats=1 \
-    "$corpus" >"$log" 2>&1 || rc=$?
+    "${dict[@]}" "$corpus" >"$log" 2>&1 || rc=$?
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   [ -n "$runs" ] || runs=$(grep -o '#[0-9]*' "$log" | tail -1 | tr -d '#')
   found=$(find "$artifacts" -type f | head -1)

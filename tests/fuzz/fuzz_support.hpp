@@ -40,8 +40,8 @@ class TempFolder {
  public:
   TempFolder() {
     const char* tmp = std::getenv("TMPDIR");
-    std::string pattern = std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") +
-                          "/dispel_fuzz_XXXXXX";
+    std::string pattern =
+        std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") + "/dispel_fuzz_XXXXXX";
     if (::mkdtemp(pattern.data()) == nullptr) {
       std::perror("fuzz: mkdtemp");
       std::abort();

@@ -13,10 +13,9 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto& folder = dispel::fuzz::temp_folder();
   // 4 x 3 pixels, 8 bits: black, white, grey and in between.
-  static const std::string image =
-      folder.write("map.pgm", std::string("P5\n4 3\n255\n", 11) +
-                                  std::string("\x00\xfe\xcd\x80\x00\x00\xfe\xfe\xcd\x10\xf0\x64",
-                                              12));
+  static const std::string image = folder.write(
+      "map.pgm", std::string("P5\n4 3\n255\n", 11) +
+                     std::string("\x00\xfe\xcd\x80\x00\x00\xfe\xfe\xcd\x10\xf0\x64", 12));
   const std::string path = folder.write("map.yaml", data, size);
   std::optional<dispel::slam::GridMap> map;
   try {

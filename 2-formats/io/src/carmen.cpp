@@ -143,8 +143,8 @@ CarmenLog parse_carmen_log(std::istream& in, const std::string& origin, float ol
         ++log.ignored_lines;
       }
     } catch (const StampError& e) {
-      throw InputError(
-          one_line(origin + ": line " + std::to_string(log.lines) + " (" + type + "): " + e.what()));
+      throw InputError(one_line(origin + ": line " + std::to_string(log.lines) + " (" + type +
+                                "): " + e.what()));
     } catch (const std::exception& e) {
       ++log.malformed_lines;
       if (log.first_malformed.empty()) {

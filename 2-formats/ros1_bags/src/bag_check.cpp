@@ -29,6 +29,7 @@ constexpr std::uint8_t kConnection = 0x07;
 
 constexpr char kMagic[] = "#ROSBAG V2.0\n";
 constexpr std::uint64_t kMagicSize = sizeof kMagic - 1;
+constexpr char kMagicV12[] = "#ROSBAG V1.2\n";
 // A record header holds a few short fields (rosbag writes at most about 100 bytes).
 constexpr std::uint64_t kMaxHeader = 1 << 20;
 // A chunk is decompressed whole, by the bag library and here: its size is bounded (rosbag writes
@@ -296,8 +297,7 @@ class MessageWalker {
     if (n * value_size > left()) {
       throw InputError(one_line(what_ + ": an array of " + std::to_string(n) + " " +
                                 std::to_string(value_size) + "-byte values (" + field +
-                                ") runs past the end of the message (" + bytes(left()) +
-                                " left)"));
+                                ") runs past the end of the message (" + bytes(left()) + " left)"));
     }
     pos_ += static_cast<std::size_t>(n * value_size);
   }
@@ -327,8 +327,8 @@ void check_message_lengths(const std::string& path, const std::string& topic, St
                            MessageKind kind, const std::uint8_t* data, std::size_t size) {
   char at[48];
   std::snprintf(at, sizeof at, "%lld.%09u s", static_cast<long long>(time.sec), time.nsec);
-  const std::string what = path + ": corrupt bag: message at " + at + " on " + quote(topic) +
-                           " (" + message_kind_name(kind) + ")";
+  const std::string what = path + ": corrupt bag: message at " + at + " on " + quote(topic) + " (" +
+                           message_kind_name(kind) + ")";
   MessageWalker w(what, data, size);
   constexpr std::uint64_t kDouble = 8;
   switch (kind) {
@@ -379,9 +379,15 @@ void check_bag_structure(const std::string& path) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) return;  // The bag library says why it cannot be opened.
   char magic[kMagicSize] = {};
-  if (std::fread(magic, 1, kMagicSize, f.get()) != kMagicSize ||
-      std::memcmp(magic, kMagic, kMagicSize) != 0) {
-    return;  // Not a bag v2.0: the bag library reads v1.2 or names what it is not.
+  if (std::fread(magic, 1, kMagicSize, f.get()) != kMagicSize) return;
+  // Format 1.2 (ROS before 2010): the bag library reads it without checking a length or an offset
+  // (fuzzing: a header length of 3.75 GiB was allocated) and it is not checked here: refused.
+  if (std::memcmp(magic, kMagicV12, kMagicSize) == 0) {
+    throw InputError(one_line(path + ": a ROS bag of format 1.2 (before 2010) is not read; " +
+                              "convert it to format 2.0: rosbag filter " + path + " new.bag True"));
+  }
+  if (std::memcmp(magic, kMagic, kMagicSize) != 0) {
+    return;  // Not a bag: the bag library names what it is not.
   }
   if (::fseeko(f.get(), 0, SEEK_END) != 0) return;
   const auto size = static_cast<std::uint64_t>(::ftello(f.get()));

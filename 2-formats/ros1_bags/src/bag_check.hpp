@@ -15,9 +15,10 @@ namespace dispel::io {
 /// except for index and chunk-info entries and connection headers), and each chunk's records
 /// (decompressed one chunk at a time). Checks every length against what holds it, every index
 /// entry against a message record of its chunk, every chunk info against its chunk, the bag
-/// header's index position and counts. A file that does not start with "#ROSBAG V2.0\n" is left
-/// to the bag library.
-/// @throws InputError "<path>: corrupt bag: record at byte N: <what is wrong>"
+/// header's index position and counts. A bag of format 1.2 is refused (the bag library reads it
+/// without checking a length); a file that is not a bag is left to the bag library to name.
+/// @throws InputError "<path>: corrupt bag: record at byte N: <what is wrong>", "<path>: a ROS
+///         bag of format 1.2 (before 2010) is not read; convert it ..."
 void check_bag_structure(const std::string& path);
 
 /// Checks the lengths inside the serialised message @p data (@p size bytes) of a kind dispel

@@ -35,9 +35,8 @@ MessageKind kind_of(const std::string& datatype) {
 
 // The bag library's messages quote what it read (a record's field names, a type): one line, cut.
 [[noreturn]] void unreadable(const std::string& path, const std::exception& e) {
-  throw InputError(
-      one_line(path + ": cannot read the recording (" + one_line(e.what(), 200) +
-               "); it may be truncated or corrupt"));
+  throw InputError(one_line(path + ": cannot read the recording (" + one_line(e.what(), 200) +
+                            "); it may be truncated or corrupt"));
 }
 
 // Runs a call into the bag library on a bag being read; its errors name the recording.
@@ -121,7 +120,8 @@ Ros1BagReader::Ros1BagReader(const std::string& path) {
   try {
     impl_->bag.open(path, rosbag::bagmode::Read);
   } catch (const std::exception& e) {
-    throw InputError(one_line(path + ": not a readable ROS 1 bag (" + one_line(e.what(), 200) + ")"));
+    throw InputError(
+        one_line(path + ": not a readable ROS 1 bag (" + one_line(e.what(), 200) + ")"));
   }
   reading(path, [&] {
     std::map<std::string, TopicInfo> topics;

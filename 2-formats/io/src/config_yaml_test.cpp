@@ -190,7 +190,7 @@ TEST(ConfigYaml, TopLevelKeysAreThoseTheParserAccepts) {
 // terminal, or worse); a key that is a list escaped as yaml-cpp's own exception.
 TEST(ConfigYaml, FuzzingFindingsAreOneLineConfigErrors) {
   expect_error("a: \"\\\x01\"\n",
-               "not valid YAML: yaml-cpp: error at line 1, column 6: unknown "
+               "not valid YAML: yaml-cpp: error at line 1, column 7: unknown "
                "escape character: \\x01");
   expect_error("[max_time_gap_s]: 1\n", "the file has a key that is not a word");
   expect_error("tracking:\n  {a: 1}: 2\n", "tracking has a key that is not a word");

@@ -216,6 +216,13 @@ Chunk check_chunk(Checker& c, FileSource& file, const Record& r) {
            "chunk of " + bytes(size) +
                " uncompressed (a chunk is at most 1 GiB; rosbag writes 768 KiB)");
   }
+  // LZ4 expands a byte of its data into at most 255: a chunk that states more than 256 times its
+  // data cannot hold it (a few bytes that stated 1 GiB had it allocated and zeroed first).
+  if (compression == "lz4" && size > 256 * std::uint64_t{r.data_len} + 64) {
+    c.fail(file, r.pos,
+           "lz4 chunk of " + bytes(r.data_len) + " states " + bytes(size) +
+               " uncompressed (lz4 expands at most 255 times)");
+  }
   if (compression == "none" && size != r.data_len) {
     c.fail(file, r.pos, "uncompressed chunk of " + bytes(size) + " holds " + bytes(r.data_len));
   }

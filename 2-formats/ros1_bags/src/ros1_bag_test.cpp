@@ -519,6 +519,24 @@ TEST(Ros1BagReader, RefusesMessageArraysLongerThanTheMessage) {
   std::remove(path.c_str());
 }
 
+// An lz4 chunk that states more than lz4 can expand its data to is refused before its stated size
+// is allocated.
+TEST(Ros1BagReader, RefusesAnLz4ChunkStatingMoreThanItCanHold) {
+  const std::string good = small_bag(rosbag::compression::LZ4);
+  const std::string path = ::testing::TempDir() + "/lz4_size_" + std::to_string(::getpid());
+  const RecordAt chunk = first(good, 0x05);
+  std::string bad = good;
+  const std::uint32_t size = 1U << 29;
+  std::memcpy(&bad[chunk.data_len_pos - 4], &size, 4);
+  spill(path, bad);
+  EXPECT_EQ(read_error(path), path + ": corrupt bag: record at byte " + std::to_string(chunk.pos) +
+                                  ": lz4 chunk of " +
+                                  std::to_string(u32_at(good, chunk.data_len_pos)) +
+                                  " bytes states 536870912 bytes uncompressed (lz4 expands at "
+                                  "most 255 times)");
+  std::remove(path.c_str());
+}
+
 // Issue 16, fuzzing: the bag library reads a bag of format 1.2 without checking a length (a header
 // length of 0xf0000000 was allocated, 3.75 GiB): such a bag is refused, with what to do.
 TEST(Ros1BagReader, RefusesFormat1Point2) {

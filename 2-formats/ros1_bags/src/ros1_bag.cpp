@@ -82,6 +82,9 @@ class Ros1Message final : public RecordedMessage {
   template <typename RosMessage>
   auto decode(MessageKind kind) const -> std::optional<decltype(to_message(RosMessage{}))> {
     if (kind_ != kind) return std::nullopt;
+    // A message of another definition of the type (its MD5 sum differs) is not deserialised
+    // (instantiate() gives none): its layout is not the one checked below.
+    if (!m_.isType<RosMessage>()) return std::nullopt;
     // The deserialiser trusts the message's array lengths: they are checked first.
     std::vector<std::uint8_t> data;
     reading(path_, [&] {

@@ -27,9 +27,6 @@ constexpr std::uint8_t kChunk = 0x05;
 constexpr std::uint8_t kChunkInfo = 0x06;
 constexpr std::uint8_t kConnection = 0x07;
 
-constexpr char kMagic[] = "#ROSBAG V2.0\n";
-constexpr std::uint64_t kMagicSize = sizeof kMagic - 1;
-constexpr char kMagicV12[] = "#ROSBAG V1.2\n";
 // A record header holds a few short fields (rosbag writes at most about 100 bytes).
 constexpr std::uint64_t kMaxHeader = 1 << 20;
 // A chunk is decompressed whole, by the bag library and here: its size is bounded (rosbag writes
@@ -385,23 +382,33 @@ void check_message_lengths(const std::string& path, const std::string& topic, St
 void check_bag_structure(const std::string& path) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) return;  // The bag library says why it cannot be opened.
-  char magic[kMagicSize] = {};
-  if (std::fread(magic, 1, kMagicSize, f.get()) != kMagicSize) return;
+  // The version line, read as the bag library reads it (fgets of at most 1023 bytes, then sscanf
+  // "#ROS%99s V%d.%d", the version major * 100 + minor in its int): "#ROSBAGZZZ V2.0" is a bag v2.0
+  // to it, whose records start after that line (fuzzing: such a line skipped this check when it
+  // wanted "#ROSBAG V2.0" exactly, and the bag library read past a buffer).
+  char line[1024];
+  if (std::fgets(line, sizeof line, f.get()) == nullptr) return;
+  char name[100];
+  int major = 0;
+  int minor = 0;
+  if (std::sscanf(line, "#ROS%99s V%d.%d", name, &major, &minor) != 3) {
+    return;  // Not a bag: the bag library names what it is not.
+  }
+  const auto version = static_cast<std::uint32_t>(major) * 100U + static_cast<std::uint32_t>(minor);
   // Format 1.2 (ROS before 2010): the bag library reads it without checking a length or an offset
-  // (fuzzing: a header length of 3.75 GiB was allocated) and it is not checked here: refused.
-  if (std::memcmp(magic, kMagicV12, kMagicSize) == 0) {
+  // (a crafted header length of 3.75 GiB was allocated) and it is not checked here: refused.
+  if (version == 102) {
     throw InputError(one_line(path + ": a ROS bag of format 1.2 (before 2010) is not read; " +
                               "convert it to format 2.0: rosbag filter " + path + " new.bag True"));
   }
-  if (std::memcmp(magic, kMagic, kMagicSize) != 0) {
-    return;  // Not a bag: the bag library names what it is not.
-  }
+  if (version != 200) return;  // The bag library names the version it does not read.
+  const auto first_record = static_cast<std::uint64_t>(::ftello(f.get()));
   if (::fseeko(f.get(), 0, SEEK_END) != 0) return;
   const auto size = static_cast<std::uint64_t>(::ftello(f.get()));
   FileSource file(path, f.get(), size);
   Checker c(path);
 
-  const Record header = c.record(file, kMagicSize);
+  const Record header = c.record(file, first_record);
   if (header.op != kBagHeader) {
     c.fail(file, header.pos,
            "the first record is of type " + std::to_string(header.op) + ", not the bag header (3)");

@@ -519,6 +519,24 @@ TEST(Ros1BagReader, RefusesMessageArraysLongerThanTheMessage) {
   std::remove(path.c_str());
 }
 
+// Issue 16, fuzzing: the bag library takes any first line that sscanf reads as "#ROS%s V%d.%d"
+// for the version line ("#ROSBAGZZZ V2.0"); the check wanted "#ROSBAG V2.0" exactly, left such a
+// bag to the bag library unchecked, and it read past a buffer (a header field's length).
+TEST(Ros1BagReader, ChecksEveryBagTheBagLibraryReadsAsFormat2) {
+  const std::string good = small_bag(rosbag::compression::Uncompressed);
+  const std::string path = ::testing::TempDir() + "/version_" + std::to_string(::getpid());
+  spill(path, "#ROSBAGZZZ V2.0\n" + good.substr(13));  // Every offset now 3 bytes off.
+  const std::string error = read_error(path);
+  EXPECT_EQ(error.rfind(path + ": corrupt bag: record at byte 16: the index at byte ", 0), 0u)
+      << error;
+  spill(path, "#ROSBAGZZZ V2.0\n" + good.substr(13, 4) + std::string("\xff\xff", 2));
+  EXPECT_NE(read_error(path).find(path + ": corrupt bag: record at byte 16: "), std::string::npos)
+      << read_error(path);
+  spill(path, "#ROSBAG V1.2\n");  // Format 1.2 by the same reading.
+  EXPECT_NE(read_error(path).find("format 1.2"), std::string::npos) << read_error(path);
+  std::remove(path.c_str());
+}
+
 // An lz4 chunk that states more than lz4 can expand its data to is refused before its stated size
 // is allocated.
 TEST(Ros1BagReader, RefusesAnLz4ChunkStatingMoreThanItCanHold) {

@@ -8,7 +8,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
+#include <system_error>
 
 namespace dispel::fuzz {
 
@@ -34,10 +36,16 @@ inline void check_message(const char* what) {
   }
 }
 
-/// A folder of its own in the temporary directory, for the files of one process's inputs
-/// (removed at exit only when empty: the files are rewritten for each input).
+/// A folder of its own in the temporary directory, for the files of one process's inputs (the
+/// files are rewritten for each input); removed with them when the process exits normally.
 class TempFolder {
  public:
+  ~TempFolder() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  TempFolder(const TempFolder&) = delete;
+  TempFolder& operator=(const TempFolder&) = delete;
   TempFolder() {
     const char* tmp = std::getenv("TMPDIR");
     std::string pattern =

@@ -413,6 +413,12 @@ void check_bag_structure(const std::string& path) {
     c.fail(file, header.pos,
            "the first record is of type " + std::to_string(header.op) + ", not the bag header (3)");
   }
+  // An encrypted bag would have the bag library run GnuPG for its key: not read.
+  const auto encryptor = header.fields.find("encryptor");
+  if (encryptor != header.fields.end() && encryptor->second != "rosbag/NoEncryptor") {
+    throw InputError(one_line(path + ": an encrypted bag (encryptor " + quote(encryptor->second) +
+                              ") is not read; decrypt it first: rosbag decrypt " + path));
+  }
   const auto index_pos = c.field<std::uint64_t>(file, header, "index_pos", "bag header");
   const auto conn_count = c.field<std::uint32_t>(file, header, "conn_count", "bag header");
   const auto chunk_count = c.field<std::uint32_t>(file, header, "chunk_count", "bag header");

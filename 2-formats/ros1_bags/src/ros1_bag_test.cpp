@@ -537,6 +537,37 @@ TEST(Ros1BagReader, ChecksEveryBagTheBagLibraryReadsAsFormat2) {
   std::remove(path.c_str());
 }
 
+// An encrypted bag (its bag header names an encryptor) is refused before the bag library would
+// run GnuPG for its key.
+TEST(Ros1BagReader, RefusesAnEncryptedBag) {
+  const std::string good = small_bag(rosbag::compression::Uncompressed);
+  const std::string path = ::testing::TempDir() + "/encrypted_" + std::to_string(::getpid());
+  // The field goes at the end of the bag header; its padding shrinks by as much: every offset
+  // stays.
+  const std::string field = "encryptor=rosbag/AesCbcEncryptor";
+  std::string length(4, '\0');
+  const auto n = static_cast<std::uint32_t>(field.size());
+  std::memcpy(&length[0], &n, 4);
+  const std::uint32_t header_len = u32_at(good, 13);
+  const std::uint32_t data_len = u32_at(good, 17 + header_len);
+  std::string bad = good.substr(0, 13);
+  const auto u32 = [](std::uint32_t v) {
+    std::string b(4, '\0');
+    std::memcpy(&b[0], &v, 4);
+    return b;
+  };
+  bad += u32(header_len + 4 + n) + good.substr(17, header_len) + length + field;
+  bad += u32(data_len - 4 - n) + good.substr(21 + header_len, data_len - 4 - n);
+  bad += good.substr(21 + header_len + data_len);
+  ASSERT_EQ(bad.size(), good.size());
+  spill(path, bad);
+  EXPECT_EQ(read_error(path), path +
+                                  ": an encrypted bag (encryptor 'rosbag/AesCbcEncryptor') is not "
+                                  "read; decrypt it first: rosbag decrypt " +
+                                  path);
+  std::remove(path.c_str());
+}
+
 // An lz4 chunk that states more than lz4 can expand its data to is refused before its stated size
 // is allocated.
 TEST(Ros1BagReader, RefusesAnLz4ChunkStatingMoreThanItCanHold) {

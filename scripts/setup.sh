@@ -23,6 +23,7 @@ packages=(
   python3-rosmaster python3-roslaunch python3-rosparam tf2-tools
                                        # their live tests: rosmaster, roslaunch,
                                        # static_transform_publisher
+  clang libclang-rt-14-dev             # scripts/fuzz.sh: libFuzzer, ASan, UBSan (build-fuzz/)
 )
 
 missing=()

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what is missing, builds, and runs every test: first the Release build (with the ROS 1
 # nodes and their live tests), then the unit tests again under AddressSanitizer and
-# UndefinedBehaviorSanitizer (without the command line and the ROS 1 nodes).
+# UndefinedBehaviorSanitizer (without the command line and the ROS 1 nodes), then each fuzz
+# target of the readers for 30 s (scripts/fuzz.sh, build-fuzz/; docs/fuzzing.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -14,3 +15,5 @@ BUILD_DIR=build-sanitize BUILD_TYPE=RelWithDebInfo bash scripts/build.sh -DDISPE
   -DDISPEL_BUILD_APPS=OFF -DDISPEL_BUILD_BENCHMARKS=OFF -DDISPEL_WITH_ROS1=OFF
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
   ctest --test-dir build-sanitize --output-on-failure -j"$jobs" -E package_
+
+bash scripts/fuzz.sh 30

@@ -143,8 +143,8 @@ CarmenLog parse_carmen_log(std::istream& in, const std::string& origin, float ol
         ++log.ignored_lines;
       }
     } catch (const StampError& e) {
-      throw InputError(origin + ": line " + std::to_string(log.lines) + " (" + type +
-                       "): " + e.what());
+      throw InputError(one_line(origin + ": line " + std::to_string(log.lines) + " (" + type +
+                                "): " + e.what()));
     } catch (const std::exception& e) {
       ++log.malformed_lines;
       if (log.first_malformed.empty()) {
@@ -153,16 +153,16 @@ CarmenLog parse_carmen_log(std::istream& in, const std::string& origin, float ol
     }
   }
   if (log.scans.empty()) {
-    throw InputError(
+    throw InputError(one_line(
         origin + ": no FLASER, RLASER or ROBOTLASER1 line" +
-        (log.first_malformed.empty() ? std::string() : "; first bad " + log.first_malformed));
+        (log.first_malformed.empty() ? std::string() : "; first bad " + log.first_malformed)));
   }
   return log;
 }
 
 CarmenLog read_carmen_log(const std::string& path, float old_max_range_m) {
   std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the file");
+  if (!in) throw InputError(one_line(path + ": cannot open the file"));
   return parse_carmen_log(in, path, old_max_range_m);
 }
 

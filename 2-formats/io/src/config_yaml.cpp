@@ -16,8 +16,9 @@ namespace {
 
 using Setter = std::function<void(const YAML::Node&, const std::string& key)>;
 
+// One line, however long the file's name and whatever yaml-cpp's message quotes.
 [[noreturn]] void fail(const std::string& origin, const std::string& message) {
-  throw ConfigError(origin + ": " + message);
+  throw ConfigError(one_line(origin + ": " + message));
 }
 
 template <typename T>
@@ -70,7 +71,11 @@ class Binder {
     if (!map.IsMap()) fail(origin_, (prefix.empty() ? "the file" : prefix) + " must be a mapping");
     std::set<std::string> seen;
     for (const auto& item : map) {
-      const auto name = item.first.as<std::string>();
+      // A key that is a list or a mapping ({[a]: 1}) names no setting.
+      if (!item.first.IsScalar()) {
+        fail(origin_, (prefix.empty() ? "the file" : prefix) + " has a key that is not a word");
+      }
+      const auto name = item.first.Scalar();
       const std::string key = prefix.empty() ? name : prefix + "." + name;
       // YAML would let the last of two equal keys win without a word.
       if (!seen.insert(name).second) fail(origin_, "key " + quote(key) + " is given twice");

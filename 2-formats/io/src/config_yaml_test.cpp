@@ -186,5 +186,23 @@ TEST(ConfigYaml, TopLevelKeysAreThoseTheParserAccepts) {
   EXPECT_THROW(parse_filter_config("fixed_frame: odom\n", "t.yaml"), ConfigError);
 }
 
+// Issue 16, fuzzing: yaml-cpp's message quoted a control byte of the file (two lines on a
+// terminal, or worse); a key that is a list escaped as yaml-cpp's own exception.
+TEST(ConfigYaml, FuzzingFindingsAreOneLineConfigErrors) {
+  expect_error("a: \"\\\x01\"\n",
+               "not valid YAML: yaml-cpp: error at line 1, column 7: unknown "
+               "escape character: \\x01");
+  expect_error("[max_time_gap_s]: 1\n", "the file has a key that is not a word");
+  expect_error("tracking:\n  {a: 1}: 2\n", "tracking has a key that is not a word");
+  try {
+    parse_odometry_settings("odometry:\n  [model]: ct\n", "test.yaml");
+    ADD_FAILURE() << "accepted a list as a key";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("odometry has a key that is not a word"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace dispel::io

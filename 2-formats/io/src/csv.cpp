@@ -34,7 +34,7 @@ bool blank(const std::string& line) { return line.find_first_not_of(" \t\r") == 
 
 CsvColumns read_csv(const std::string& path, const std::vector<std::string>& wanted) {
   std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the file");
+  if (!in) throw InputError(one_line(path + ": cannot open the file"));
   std::string line;
   int number = 0;
   std::vector<std::string> header;
@@ -48,8 +48,8 @@ CsvColumns read_csv(const std::string& path, const std::vector<std::string>& wan
   for (const auto& w : wanted) {
     const auto it = std::find(header.begin(), header.end(), w);
     if (it == header.end()) {
-      throw InputError(path + ": the header must name the columns " + expected + " (line " +
-                       std::to_string(number) + ": " + quote(line) + ")");
+      throw InputError(one_line(path + ": the header must name the columns " + expected +
+                                " (line " + std::to_string(number) + ": " + quote(line) + ")"));
     }
     index.push_back(static_cast<std::size_t>(it - header.begin()));
   }
@@ -59,8 +59,9 @@ CsvColumns read_csv(const std::string& path, const std::vector<std::string>& wan
     if (blank(line)) continue;
     const auto cells = split(line);
     if (cells.size() != header.size()) {
-      throw InputError(path + ":" + std::to_string(number) + ": " + std::to_string(header.size()) +
-                       " values expected, got " + std::to_string(cells.size()));
+      throw InputError(one_line(path + ":" + std::to_string(number) + ": " +
+                                std::to_string(header.size()) + " values expected, got " +
+                                std::to_string(cells.size())));
     }
     std::vector<double> row;
     for (std::size_t i : index) {
@@ -73,8 +74,8 @@ CsvColumns read_csv(const std::string& path, const std::vector<std::string>& wan
         used = 0;
       }
       if (c.empty() || used != c.size()) {
-        throw InputError(path + ":" + std::to_string(number) + ": " + header[i] + " " + quote(c) +
-                         " is not a number");
+        throw InputError(one_line(path + ":" + std::to_string(number) + ": " + header[i] + " " +
+                                  quote(c) + " is not a number"));
       }
       row.push_back(v);
     }

@@ -15,7 +15,7 @@ class Reader {
   explicit Reader(std::string origin) : origin_(std::move(origin)) {}
 
   [[noreturn]] void fail(const std::string& message) const {
-    throw ConfigError(origin_ + ": " + message);
+    throw ConfigError(one_line(origin_ + ": " + message));
   }
 
   void keys(const YAML::Node& n, const std::string& path,

@@ -23,12 +23,16 @@ void append_escaped(std::string& out, unsigned char c) {
   out += hex;
 }
 
-// The first @p max_chars characters of @p text, escaped; whether it was cut.
+// As much of @p text, escaped, as fits in @p max_chars characters (an escaped byte takes 4: they
+// are counted as written, not as read); whether it was cut.
 std::string escaped_prefix(std::string_view text, std::size_t max_chars, bool& cut) {
   std::string out;
   std::size_t i = 0;
-  for (; i < text.size() && i < max_chars; ++i) {
-    append_escaped(out, static_cast<unsigned char>(text[i]));
+  for (; i < text.size(); ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    const std::size_t width = c >= 0x20 && c < 0x7f ? 1 : 4;
+    if (out.size() + width > max_chars) break;
+    append_escaped(out, c);
   }
   cut = i < text.size();
   return out;

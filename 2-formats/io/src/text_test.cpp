@@ -33,6 +33,10 @@ TEST(Quote, LongTextIsCutAndBinaryEscaped) {
 TEST(OneLine, ControlBytesEscapedAndLengthBounded) {
   EXPECT_EQ(one_line("two\nlines"), "two\\x0alines");
   EXPECT_EQ(one_line(std::string(1000, 'y')).size(), 403u);
+  // Issue 16, fuzzing: escapes were counted as one character (a file name of 400 bytes 0xff made
+  // a message of 1600 characters).
+  EXPECT_EQ(one_line(std::string(1000, '\xff')).size(), 403u);
+  EXPECT_EQ(one_line("ab" + std::string(1000, '\x01'), 10), "ab\\x01\\x01...");
 }
 
 TEST(ReadRegularFile, ReadsAFile) {

@@ -27,8 +27,6 @@ constexpr std::uint8_t kChunk = 0x05;
 constexpr std::uint8_t kChunkInfo = 0x06;
 constexpr std::uint8_t kConnection = 0x07;
 
-constexpr char kMagic[] = "#ROSBAG V2.0\n";
-constexpr std::uint64_t kMagicSize = sizeof kMagic - 1;
 // A record header holds a few short fields (rosbag writes at most about 100 bytes).
 constexpr std::uint64_t kMaxHeader = 1 << 20;
 // A chunk is decompressed whole, by the bag library and here: its size is bounded (rosbag writes
@@ -215,6 +213,13 @@ Chunk check_chunk(Checker& c, FileSource& file, const Record& r) {
            "chunk of " + bytes(size) +
                " uncompressed (a chunk is at most 1 GiB; rosbag writes 768 KiB)");
   }
+  // LZ4 expands a byte of its data into at most 255: a chunk that states more than 256 times its
+  // data cannot hold it (a few bytes that stated 1 GiB had it allocated and zeroed first).
+  if (compression == "lz4" && size > 256 * std::uint64_t{r.data_len} + 64) {
+    c.fail(file, r.pos,
+           "lz4 chunk of " + bytes(r.data_len) + " states " + bytes(size) +
+               " uncompressed (lz4 expands at most 255 times)");
+  }
   if (compression == "none" && size != r.data_len) {
     c.fail(file, r.pos, "uncompressed chunk of " + bytes(size) + " holds " + bytes(r.data_len));
   }
@@ -265,25 +270,154 @@ Chunk check_chunk(Checker& c, FileSource& file, const Record& r) {
   return chunk;
 }
 
+// Walks a serialised ROS 1 message: every length checked against the bytes left.
+class MessageWalker {
+ public:
+  MessageWalker(const std::string& what, const std::uint8_t* data, std::size_t size)
+      : what_(what), data_(data), size_(size) {}
+
+  void skip(std::uint64_t n, const char* field) {
+    if (n > left()) {
+      throw InputError(one_line(what_ + ": " + field + " of " + bytes(n) +
+                                " runs past the end of the message (" + bytes(left()) + " left)"));
+    }
+    pos_ += static_cast<std::size_t>(n);
+  }
+  std::uint32_t length(const char* field) {
+    if (left() < 4) skip(4, field);
+    std::uint32_t n = 0;
+    std::memcpy(&n, data_ + pos_, 4);
+    pos_ += 4;
+    return n;
+  }
+  void string(const char* field) { skip(length(field), field); }
+  void header() {
+    skip(12, "a header's seq and stamp");
+    string("a header's frame_id");
+  }
+  // An array of @p count values of @p value_size bytes each (its length read first).
+  void array(std::uint64_t value_size, const char* field) {
+    const std::uint64_t n = length(field);
+    if (n * value_size > left()) {
+      throw InputError(one_line(what_ + ": an array of " + std::to_string(n) + " " +
+                                std::to_string(value_size) + "-byte values (" + field +
+                                ") runs past the end of the message (" + bytes(left()) + " left)"));
+    }
+    pos_ += static_cast<std::size_t>(n * value_size);
+  }
+  // The length of an array of values of at least @p min_size bytes each, checked.
+  std::uint32_t count(std::uint64_t min_size, const char* field) {
+    const std::uint32_t n = length(field);
+    if (n * min_size > left()) {
+      throw InputError(one_line(what_ + ": an array of " + std::to_string(n) + " " + field +
+                                " (at least " + bytes(min_size) +
+                                " each) runs past the end of the message (" + bytes(left()) +
+                                " left)"));
+    }
+    return n;
+  }
+
+ private:
+  std::uint64_t left() const { return size_ - pos_; }
+  const std::string& what_;
+  const std::uint8_t* data_;
+  std::size_t size_;
+  std::size_t pos_ = 0;
+};
+
 }  // namespace
+
+void check_message_lengths(const std::string& path, const std::string& topic, Stamp time,
+                           MessageKind kind, const std::uint8_t* data, std::size_t size) {
+  char at[48];
+  std::snprintf(at, sizeof at, "%lld.%09u s", static_cast<long long>(time.sec), time.nsec);
+  const std::string what = path + ": corrupt bag: message at " + at + " on " + quote(topic) + " (" +
+                           message_kind_name(kind) + ")";
+  MessageWalker w(what, data, size);
+  constexpr std::uint64_t kDouble = 8;
+  switch (kind) {
+    case MessageKind::kLaserScan:
+      w.header();
+      w.skip(7 * 4, "the angles, times and range limits");
+      w.array(4, "ranges");
+      w.array(4, "intensities");
+      break;
+    case MessageKind::kOdometry:
+      w.header();
+      w.string("child_frame_id");
+      w.skip((7 + 36 + 6 + 36) * kDouble, "the pose and twist with their covariances");
+      break;
+    case MessageKind::kTransforms: {
+      // A TransformStamped: a header (at least 16 bytes), child_frame_id (at least 4), 7 doubles.
+      const std::uint32_t n = w.count(16 + 4 + 7 * kDouble, "transforms");
+      for (std::uint32_t i = 0; i < n; ++i) {
+        w.header();
+        w.string("child_frame_id");
+        w.skip(7 * kDouble, "a transform");
+      }
+      break;
+    }
+    case MessageKind::kJointState: {
+      w.header();
+      const std::uint32_t n = w.count(4, "joint names");
+      for (std::uint32_t i = 0; i < n; ++i) w.string("a joint name");
+      w.array(kDouble, "position");
+      w.array(kDouble, "velocity");
+      w.array(kDouble, "effort");
+      break;
+    }
+    case MessageKind::kImu:
+      w.header();
+      w.skip((4 + 9 + 3 + 9 + 3 + 9) * kDouble, "the orientation, rates and accelerations");
+      break;
+    case MessageKind::kNavSatFix:
+      w.header();
+      w.skip(1 + 2 + (3 + 9) * kDouble + 1, "the status, position and covariance");
+      break;
+    case MessageKind::kOther:
+      break;  // Never decoded.
+  }
+}
 
 void check_bag_structure(const std::string& path) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) return;  // The bag library says why it cannot be opened.
-  char magic[kMagicSize] = {};
-  if (std::fread(magic, 1, kMagicSize, f.get()) != kMagicSize ||
-      std::memcmp(magic, kMagic, kMagicSize) != 0) {
-    return;  // Not a bag v2.0: the bag library reads v1.2 or names what it is not.
+  // The version line, read as the bag library reads it (fgets of at most 1023 bytes, then sscanf
+  // "#ROS%99s V%d.%d", the version major * 100 + minor in its int): "#ROSBAGZZZ V2.0" is a bag v2.0
+  // to it, whose records start after that line (fuzzing: such a line skipped this check when it
+  // wanted "#ROSBAG V2.0" exactly, and the bag library read past a buffer).
+  char line[1024];
+  if (std::fgets(line, sizeof line, f.get()) == nullptr) return;
+  char name[100];
+  int major = 0;
+  int minor = 0;
+  if (std::sscanf(line, "#ROS%99s V%d.%d", name, &major, &minor) != 3) {
+    return;  // Not a bag: the bag library names what it is not.
   }
+  const auto version = static_cast<std::uint32_t>(major) * 100U + static_cast<std::uint32_t>(minor);
+  // Format 1.2 (ROS before 2010): the bag library reads it without checking a length or an offset
+  // (a crafted header length of 3.75 GiB was allocated) and it is not checked here: refused.
+  if (version == 102) {
+    throw InputError(one_line(path + ": a ROS bag of format 1.2 (before 2010) is not read; " +
+                              "convert it to format 2.0: rosbag filter " + path + " new.bag True"));
+  }
+  if (version != 200) return;  // The bag library names the version it does not read.
+  const auto first_record = static_cast<std::uint64_t>(::ftello(f.get()));
   if (::fseeko(f.get(), 0, SEEK_END) != 0) return;
   const auto size = static_cast<std::uint64_t>(::ftello(f.get()));
   FileSource file(path, f.get(), size);
   Checker c(path);
 
-  const Record header = c.record(file, kMagicSize);
+  const Record header = c.record(file, first_record);
   if (header.op != kBagHeader) {
     c.fail(file, header.pos,
            "the first record is of type " + std::to_string(header.op) + ", not the bag header (3)");
+  }
+  // An encrypted bag would have the bag library run GnuPG for its key: not read.
+  const auto encryptor = header.fields.find("encryptor");
+  if (encryptor != header.fields.end() && encryptor->second != "rosbag/NoEncryptor") {
+    throw InputError(one_line(path + ": an encrypted bag (encryptor " + quote(encryptor->second) +
+                              ") is not read; decrypt it first: rosbag decrypt " + path));
   }
   const auto index_pos = c.field<std::uint64_t>(file, header, "index_pos", "bag header");
   const auto conn_count = c.field<std::uint32_t>(file, header, "conn_count", "bag header");

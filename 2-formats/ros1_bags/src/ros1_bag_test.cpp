@@ -454,6 +454,150 @@ TEST(Ros1BagReader, RefusesLengthsThatDoNotFit) {
   std::remove(path.c_str());
 }
 
+// Issue 16, fuzzing: an array length of 2^32 - 1 inside a message made the ROS deserialiser
+// allocate 16 GiB or more (it sizes an array by its length field before it checks that the
+// message holds it). The lengths are checked first: one line naming the message.
+TEST(Ros1BagReader, RefusesMessageArraysLongerThanTheMessage) {
+  const std::string path =
+      ::testing::TempDir() + "/corrupt_array_" + std::to_string(::getpid()) + ".bag";
+  sensor_msgs::LaserScan scan;
+  scan.header.stamp = ros::Time(10, 0);
+  scan.header.frame_id = "laser";
+  scan.ranges.assign(7, 1.5F);
+  sensor_msgs::JointState wheels;
+  wheels.header.stamp = ros::Time(10, 0);
+  wheels.name = {"left", "right"};
+  wheels.velocity = {0.25, 0.75};
+  {
+    rosbag::Bag bag(path, rosbag::bagmode::Write);
+    bag.write("/scan", ros::Time(10, 0), scan);
+    bag.write("/wheels", ros::Time(10, 0), wheels);
+  }
+  const std::string good = slurp(path);
+  const auto read_all = [&] {
+    try {
+      Ros1BagReader reader(path);
+      reader.read({}, [](const RecordedMessage& m) {
+        (void)m.scan();
+        (void)m.joint_state();
+      });
+      return std::string();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+  };
+  const auto with_huge_length = [&](const std::string& pattern) {
+    std::string bad = good;
+    const auto at = bad.find(pattern);
+    EXPECT_NE(at, std::string::npos);
+    if (at == std::string::npos) return std::string("pattern not found");
+    const std::uint32_t huge = 0xffffffff;
+    std::memcpy(&bad[at], &huge, 4);
+    spill(path, bad);
+    return read_all();
+  };
+  EXPECT_EQ(read_all(), "");
+  // The scan's ranges: 7, then 1.5F.
+  const std::string ranges = with_huge_length(std::string("\x07\0\0\0\0\0\xc0\x3f", 8));
+  EXPECT_NE(ranges.find(path + ": corrupt bag: message at 10.000000000 s on '/scan' "
+                               "(sensor_msgs/LaserScan): an array of 4294967295 4-byte values "
+                               "(ranges) runs past the end of the message ("),
+            std::string::npos)
+      << ranges;
+  // The wheels' velocities: 2, then 0.25.
+  const std::string velocity = with_huge_length(std::string("\x02\0\0\0\0\0\0\0\0\0\xd0\x3f", 12));
+  EXPECT_NE(velocity.find("on '/wheels' (sensor_msgs/JointState): an array of 4294967295 8-byte "
+                          "values (velocity) runs past the end of the message ("),
+            std::string::npos)
+      << velocity;
+  // The joints' names: 2, then "left".
+  const std::string names = with_huge_length(std::string("\x02\0\0\0\x04\0\0\0left", 12));
+  EXPECT_NE(names.find("an array of 4294967295 joint names (at least 4 bytes each) runs past the "
+                       "end of the message ("),
+            std::string::npos)
+      << names;
+  std::remove(path.c_str());
+}
+
+// Issue 16, fuzzing: the bag library takes any first line that sscanf reads as "#ROS%s V%d.%d"
+// for the version line ("#ROSBAGZZZ V2.0"); the check wanted "#ROSBAG V2.0" exactly, left such a
+// bag to the bag library unchecked, and it read past a buffer (a header field's length).
+TEST(Ros1BagReader, ChecksEveryBagTheBagLibraryReadsAsFormat2) {
+  const std::string good = small_bag(rosbag::compression::Uncompressed);
+  const std::string path = ::testing::TempDir() + "/version_" + std::to_string(::getpid());
+  spill(path, "#ROSBAGZZZ V2.0\n" + good.substr(13));  // Every offset now 3 bytes off.
+  const std::string error = read_error(path);
+  EXPECT_EQ(error.rfind(path + ": corrupt bag: record at byte 16: the index at byte ", 0), 0u)
+      << error;
+  spill(path, "#ROSBAGZZZ V2.0\n" + good.substr(13, 4) + std::string("\xff\xff", 2));
+  EXPECT_NE(read_error(path).find(path + ": corrupt bag: record at byte 16: "), std::string::npos)
+      << read_error(path);
+  spill(path, "#ROSBAG V1.2\n");  // Format 1.2 by the same reading.
+  EXPECT_NE(read_error(path).find("format 1.2"), std::string::npos) << read_error(path);
+  std::remove(path.c_str());
+}
+
+// An encrypted bag (its bag header names an encryptor) is refused before the bag library would
+// run GnuPG for its key.
+TEST(Ros1BagReader, RefusesAnEncryptedBag) {
+  const std::string good = small_bag(rosbag::compression::Uncompressed);
+  const std::string path = ::testing::TempDir() + "/encrypted_" + std::to_string(::getpid());
+  // The field goes at the end of the bag header; its padding shrinks by as much: every offset
+  // stays.
+  const std::string field = "encryptor=rosbag/AesCbcEncryptor";
+  std::string length(4, '\0');
+  const auto n = static_cast<std::uint32_t>(field.size());
+  std::memcpy(&length[0], &n, 4);
+  const std::uint32_t header_len = u32_at(good, 13);
+  const std::uint32_t data_len = u32_at(good, 17 + header_len);
+  std::string bad = good.substr(0, 13);
+  const auto u32 = [](std::uint32_t v) {
+    std::string b(4, '\0');
+    std::memcpy(&b[0], &v, 4);
+    return b;
+  };
+  bad += u32(header_len + 4 + n) + good.substr(17, header_len) + length + field;
+  bad += u32(data_len - 4 - n) + good.substr(21 + header_len, data_len - 4 - n);
+  bad += good.substr(21 + header_len + data_len);
+  ASSERT_EQ(bad.size(), good.size());
+  spill(path, bad);
+  EXPECT_EQ(read_error(path), path +
+                                  ": an encrypted bag (encryptor 'rosbag/AesCbcEncryptor') is not "
+                                  "read; decrypt it first: rosbag decrypt " +
+                                  path);
+  std::remove(path.c_str());
+}
+
+// An lz4 chunk that states more than lz4 can expand its data to is refused before its stated size
+// is allocated.
+TEST(Ros1BagReader, RefusesAnLz4ChunkStatingMoreThanItCanHold) {
+  const std::string good = small_bag(rosbag::compression::LZ4);
+  const std::string path = ::testing::TempDir() + "/lz4_size_" + std::to_string(::getpid());
+  const RecordAt chunk = first(good, 0x05);
+  std::string bad = good;
+  const std::uint32_t size = 1U << 29;
+  std::memcpy(&bad[chunk.data_len_pos - 4], &size, 4);
+  spill(path, bad);
+  EXPECT_EQ(read_error(path), path + ": corrupt bag: record at byte " + std::to_string(chunk.pos) +
+                                  ": lz4 chunk of " +
+                                  std::to_string(u32_at(good, chunk.data_len_pos)) +
+                                  " bytes states 536870912 bytes uncompressed (lz4 expands at "
+                                  "most 255 times)");
+  std::remove(path.c_str());
+}
+
+// Issue 16, fuzzing: the bag library reads a bag of format 1.2 without checking a length (a header
+// length of 0xf0000000 was allocated, 3.75 GiB): such a bag is refused, with what to do.
+TEST(Ros1BagReader, RefusesFormat1Point2) {
+  const std::string path = ::testing::TempDir() + "/v12_" + std::to_string(::getpid()) + ".bag";
+  spill(path, std::string("#ROSBAG V1.2\n\0\0\0\xf0op=\x03", 21));
+  EXPECT_EQ(read_error(path), path +
+                                  ": a ROS bag of format 1.2 (before 2010) is not read; convert "
+                                  "it to format 2.0: rosbag filter " +
+                                  path + " new.bag True");
+  std::remove(path.c_str());
+}
+
 // Seeded corruptions of bags of each compression (bytes flipped, 8 bytes set to 0x7f, a record's
 // length overwritten, the file cut short), each read and copied into a new bag in a child
 // process: it reads whole or fails with a one-line error naming the file; no signal, no output

@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -39,9 +40,6 @@ std::string file_name_of(const std::string& path) {
   const auto slash = path.find_last_of('/');
   return slash == std::string::npos ? path : path.substr(slash + 1);
 }
-
-// yaml-cpp's messages span one line, but keep only the first to be sure.
-std::string one_line(const std::string& s) { return s.substr(0, s.find('\n')); }
 
 // The shortest decimal text that reads back as exactly @p v.
 std::string exact(double v) {
@@ -111,6 +109,9 @@ Pgm read_pgm(const std::string& path) {
   jobs::check_input_file(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw JobError(path + ": cannot read");
+  in.seekg(0, std::ios::end);
+  const auto file_size = static_cast<std::uint64_t>(std::max<std::streamoff>(in.tellg(), 0));
+  in.seekg(0);
   char magic[2] = {0, 0};
   in.read(magic, 2);
   if (in.gcount() != 2 || magic[0] != 'P' || (magic[1] != '5' && magic[1] != '2')) {
@@ -126,6 +127,13 @@ Pgm read_pgm(const std::string& path) {
                    ") is not supported; save the map with 8 bits");
   }
   const std::size_t n = static_cast<std::size_t>(pgm.width) * static_cast<std::size_t>(pgm.height);
+  // Every pixel takes at least a byte of the file (P2: a digit and a space): a header that states
+  // more is refused before anything is allocated for them (it asked for up to 10^12 pixels).
+  if (n > file_size) {
+    throw JobError(path + ": image is " + std::to_string(pgm.width) + " x " +
+                   std::to_string(pgm.height) + " pixels, more than the file's " +
+                   std::to_string(file_size) + " bytes can hold (truncated?)");
+  }
   pgm.pixels.resize(n);
   std::size_t got = 0;
   if (binary) {  // The header ended with one white-space character, already read.
@@ -209,13 +217,15 @@ void GridMap::validate() const {
   }
 }
 
-GridMap read_map_yaml(const std::string& path) {
+namespace {
+
+GridMap read_map(const std::string& path) {
   jobs::check_input_file(path);
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);
   } catch (const YAML::Exception& e) {
-    throw JobError(path + ": not a YAML file (" + one_line(e.what()) + ")");
+    throw JobError(path + ": not a YAML file (" + io::one_line(e.what(), 200) + ")");
   }
   if (!root.IsMap()) throw JobError(path + ": not a map_server map (no key: value pairs)");
 
@@ -283,7 +293,8 @@ GridMap read_map_yaml(const std::string& path) {
           value = kOccupiedCell;
         } else if (occupancy < free_thresh) {
           value = kFreeCell;
-        } else if (mode == "trinary") {
+        } else if (mode == "trinary" || occupied_thresh == free_thresh) {
+          // (scale with equal thresholds: an occupancy equal to both is neither; 0 / 0 before.)
           value = kUnknownCell;
         } else {
           value = static_cast<std::int8_t>(99.0 * (occupancy - free_thresh) /
@@ -294,6 +305,18 @@ GridMap read_map_yaml(const std::string& path) {
     }
   }
   return map;
+}
+
+}  // namespace
+
+GridMap read_map_yaml(const std::string& path) {
+  // The messages name the files (the image's name is the YAML file's text) and quote their text:
+  // one line, cut.
+  try {
+    return read_map(path);
+  } catch (const JobError& e) {
+    throw JobError(io::one_line(e.what()));
+  }
 }
 
 void write_map_yaml(const GridMap& map, const std::string& yaml_path) {
@@ -345,7 +368,7 @@ void write_map_yaml(const GridMap& map, const std::string& yaml_path) {
   } catch (const JobError&) {
     throw;
   } catch (const std::exception& e) {
-    throw JobError(one_line(e.what()));
+    throw JobError(io::one_line(e.what()));
   }
 }
 

@@ -164,6 +164,27 @@ TEST(SlamGridMapBadInput, EachProblemNamedWithItsFile) {
   expect_error(map_yaml("ascii_bad.yaml", "ascii_bad.pgm"), "pixel 1 '300'");
 }
 
+// Issue 16, fuzzing: a PGM header stating 10^6 x 10^6 pixels had them allocated before they were
+// read (4 TB); scale mode with equal thresholds divided 0 by 0 into a cell (undefined behaviour);
+// an image name with a newline made an error of two lines.
+TEST(SlamGridMapBadInput, FuzzingFindings) {
+  write_text("huge.pgm", std::string("P5\n1000000 1000000\n255\n\x00", 24));
+  expect_error(map_yaml("huge.yaml", "huge.pgm"),
+               "huge.pgm: image is 1000000 x 1000000 pixels, more than the file's 24 bytes can "
+               "hold");
+  write_text("black.pgm", std::string("P5\n2 1\n255\n\x00\xff", 13));
+  const GridMap m =
+      read_map_yaml(write_text("equal.yaml",
+                               "image: black.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\n"
+                               "occupied_thresh: 1\nfree_thresh: 1\nmode: scale\n"));
+  EXPECT_EQ(m.at(0, 0), kUnknownCell);  // Occupancy 1: neither above nor below the thresholds.
+  EXPECT_EQ(m.at(1, 0), kFreeCell);
+  expect_error(write_text("newline.yaml",
+                          "image: \"bad\\nname.pgm\"\nresolution: 0.05\norigin: [0, 0, 0]\n"
+                          "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"),
+               "bad\\x0aname.pgm: No such file or directory");
+}
+
 TEST(SlamGridMapBadInput, InvalidMapsAreNotWritten) {
   const std::string yaml = temp_path("invalid.yaml");
   const auto expect_refused = [&](const GridMap& m, const std::string& expected) {

@@ -13,12 +13,12 @@ namespace dispel::io {
 inline constexpr std::size_t kQuotedChars = 80;
 
 /// @p text in single quotes for an error message: bytes that are not printable ASCII written as
-/// \xNN, cut after @p max_chars characters with "... (N bytes)" telling the whole length. An
-/// error never echoes unbounded or binary input.
+/// \xNN, cut after @p max_chars characters (as written: an escaped byte counts 4) with
+/// "... (N bytes)" telling the whole length. An error never echoes unbounded or binary input.
 std::string quote(std::string_view text, std::size_t max_chars = kQuotedChars);
 
 /// @p text made one printable line of at most @p max_chars characters (for a whole message):
-/// newlines and other control bytes escaped, the rest cut with "...".
+/// newlines and other control bytes escaped (an escaped byte counts 4), the rest cut with "...".
 std::string one_line(std::string_view text, std::size_t max_chars = 400);
 
 /// Reads the whole of @p path, which must be a regular file: its type is checked (stat) before

@@ -17,8 +17,9 @@ class Ros1BagReader final : public RecordingReader {
  public:
   /// Opens @p path, its record structure checked first (lengths, offsets, index; see
   /// src/bag_check.hpp): the bag library trusts them and crashed on a corrupt one.
+  /// A bag of format 1.2 (before 2010) is refused: the bag library reads it unchecked.
   /// @throws InputError "<path>: corrupt bag: record at byte N: ...",
-  ///         "<path>: not a readable ROS 1 bag (...)"
+  ///         "<path>: not a readable ROS 1 bag (...)", "<path>: a ROS bag of format 1.2 ..."
   explicit Ros1BagReader(const std::string& path);
   ~Ros1BagReader() override;
 

@@ -270,9 +270,13 @@ TEST(SlamPfLocalizationBadInput, BadMapsBagsAndOptions) {
 
   const std::string header =
       "resolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
-  write_text("corrupt.pgm", "P5\n100 100\n255\n" + std::string(1000, '\xfe'));
+  write_text("corrupt.pgm", "P5\n100 100\n255\n" + std::string(9990, '\xfe'));
   o.map_yaml = write_text("corrupt.yaml", "image: corrupt.pgm\n" + header);
-  expect_error(o, "corrupt.pgm: image is 100 x 100 pixels but holds only 1000");
+  expect_error(o, "corrupt.pgm: image is 100 x 100 pixels but holds only 9990");
+  // Fewer bytes than the header states pixels: refused before the pixels are allocated.
+  write_text("short.pgm", "P5\n100 100\n255\n" + std::string(1000, '\xfe'));
+  o.map_yaml = write_text("short.yaml", "image: short.pgm\n" + header);
+  expect_error(o, "short.pgm: image is 100 x 100 pixels, more than the file's 1015 bytes");
   write_text("good.pgm", "P5\n2 2\n255\n" + std::string(4, '\xfe'));
   o.map_yaml = write_text("zero.yaml",
                           "image: good.pgm\nresolution: 0\norigin: [0, 0, 0]\n"

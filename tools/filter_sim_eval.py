@@ -4,11 +4,13 @@ README's "Results on the simulated thesis hall" and docs/simulator.md.
 
 usage: filter_sim_eval.py DISPEL SCENARIO.yaml CONFIG.yaml [--seeds N] [--set section.key=value ...]
                           [--scenario-set section.key=value ...] [--scale-to-scanner]
+                          [--laser-only]
 
 For each seed 1..N (default 5): dispel sim -> dispel filter --config -> dispel eval --json. --set
 changes one key of the configuration, e.g. --set classification.presumption=guilt
 --set tracking.matching=nearest_neighbour; --scenario-set changes one of the scenario, e.g.
---scenario-set robot.speed_mps=1.5; --scale-to-scanner is passed to dispel filter. Prints mean preservation and rejection and the median
+--scenario-set robot.speed_mps=1.5; --scale-to-scanner is passed to dispel filter; --laser-only
+passes --odom-topic none (the registration alone, seeded by a constant-velocity guess). Prints mean preservation and rejection and the median
 over seeds of each run's median detection latency."""
 import json, os, re, statistics, subprocess, sys, tempfile
 
@@ -37,6 +39,8 @@ def main():
     settings = [args[i + 1] for i, a in enumerate(args) if a == '--set']
     scenario_settings = [args[i + 1] for i, a in enumerate(args) if a == '--scenario-set']
     filter_args = ['--scale-to-scanner'] if '--scale-to-scanner' in args else []
+    if '--laser-only' in args:  # The recording's odometry is not used: registration alone.
+        filter_args += ['--odom-topic', 'none']
     text = set_keys(open(config).read(), settings)
     scenario_text = set_keys(open(scenario).read(), scenario_settings)
     runs = []
@@ -71,7 +75,7 @@ def main():
         os.path.basename(scenario), os.path.basename(config),
         ''.join(' --set ' + s for s in settings) +
         ''.join(' --scenario-set ' + s for s in scenario_settings) +
-        (' --scale-to-scanner' if filter_args else ''), seeds, mean('preservation_rate'),
+        ''.join(' ' + a for a in filter_args), seeds, mean('preservation_rate'),
         mean('rejection_rate'), '%.2f s' % statistics.median(latencies) if latencies else '-'))
     for seed, r in enumerate(runs, 1):
         lat = r['detection_latency_s']['median']

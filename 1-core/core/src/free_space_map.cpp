@@ -68,16 +68,21 @@ void FreeSpaceMap::clear() {
 
 bool FreeSpaceMap::cell_of(const Eigen::Vector2d& p, std::int64_t& ix, std::int64_t& iy) const {
   if (!placed_) return false;
-  const double fx = std::floor((p.x() - anchor_.x()) / config_.cell_size_m);
-  const double fy = std::floor((p.y() - anchor_.y()) / config_.cell_size_m);
-  // Compared as doubles first: a point far away (or NaN) is refused before any integer cast.
+  const double fx = (p.x() - anchor_.x()) / config_.cell_size_m;
+  const double fy = (p.y() - anchor_.y()) / config_.cell_size_m;
+  // Compared as doubles first: a point far away (or NaN) is refused before any integer cast (a
+  // tile more than the reach; the tile's own test below is exact).
   const double reach = static_cast<double>((reach_tiles_ + 1) * kTileSide);
   if (!(std::abs(fx - static_cast<double>(sensor_tx_ * kTileSide)) <= reach &&
         std::abs(fy - static_cast<double>(sensor_ty_ * kTileSide)) <= reach)) {
     return false;
   }
+  // Rounded down without a call into libm (this runs for every beam and every cell asked about):
+  // truncation, then one less for a negative value that was not whole.
   ix = static_cast<std::int64_t>(fx);
   iy = static_cast<std::int64_t>(fy);
+  ix -= static_cast<double>(ix) > fx ? 1 : 0;
+  iy -= static_cast<double>(iy) > fy ? 1 : 0;
   return tile_within_reach(ix >> kTileBits, iy >> kTileBits);
 }
 

@@ -26,9 +26,6 @@ constexpr double kMinMotionForThreshold_m = 0.02;
 // Voxels hit by fewer scans than structure needs are forgotten when unseen this long (the trail
 // of someone walking by).
 constexpr double kTransientMemory_s = 2.0;
-// Candidates within this of a sample point at the seed are searched first.
-constexpr double kNearRing_m = 0.2;
-constexpr std::int64_t kMaxWindowVoxels = std::int64_t{1} << 16U;
 
 }  // namespace
 
@@ -233,130 +230,51 @@ Eigen::Vector2d ScanRegistration::normal_at(std::size_t b) const {
   return normal;
 }
 
-// Candidates: the points of the map voxels within the threshold (in whole voxels) of a sample point
-// at the seed that lie within the threshold plus the largest correction a registration may make
-// (max_correction_m) of it, gathered once: the registration moves a point by little, and keeping
-// to what lay near the seed holds a laser-only registration to it. (Gathered again wherever a
-// point moved, the nearest points anywhere within the threshold, laser-only drifted 3.6 m in
-// 100 m around the simulated office loop instead of 0.05 m, and on Debian's wheelchair log 19
-// scans fell back instead of 5 or fewer. Twice the threshold alone as the radius lost matches the
-// registration needed: a simulated warehouse seed kept 0.990 of its walls instead of 0.999.)
-// Those within kNearRing_m come first: a search that found one near enough need not go on.
-
-// The voxels (structure only, or all) around the sample points at @p pose, in a dense window (they
-// are looked up there, not in the hash map: a scan asks for each voxel around each of its points,
-// tens of thousands of lookups against the map's few thousand voxels); a span too wide for it, or
-// a voxel outside it, is looked up in the hash map.
-void ScanRegistration::open_window(const Pose2& pose, int reach) {
-  close_window();
-  if (sample_.empty()) return;
+// The candidate map points of each sample point (at @p pose): the points of the voxels within
+// @p reach of its voxel (structure only, or all) that lie within @p radius of it; returns how many
+// sample points have one. The radius is the threshold plus the largest correction a registration
+// may make (max_correction_m): twice the threshold alone lost matches the registration needed
+// (a simulated warehouse seed kept 0.990 of its walls instead of 0.999).
+std::int32_t ScanRegistration::gather_candidates(const Pose2& pose, int reach, double radius,
+                                                 bool structure_only) {
+  candidate_begin_.assign(sample_.size() + 1, 0);
+  candidate_points_.clear();
+  candidate_normals_.clear();
   const PoseTransform to_fixed(pose);
-  const double voxel = config_.voxel_size_m;
-  std::int64_t min_ix = 0, max_ix = 0, min_iy = 0, max_iy = 0;
-  for (std::size_t i = 0; i < sample_.size(); ++i) {
-    const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
-    const auto ix = static_cast<std::int64_t>(std::floor(q.x() / voxel));
-    const auto iy = static_cast<std::int64_t>(std::floor(q.y() / voxel));
-    min_ix = i == 0 ? ix : std::min(min_ix, ix);
-    max_ix = i == 0 ? ix : std::max(max_ix, ix);
-    min_iy = i == 0 ? iy : std::min(min_iy, iy);
-    max_iy = i == 0 ? iy : std::max(max_iy, iy);
-  }
-  window_x0_ = min_ix - reach;
-  window_y0_ = min_iy - reach;
-  window_w_ = max_ix - min_ix + 1 + 2 * reach;
-  window_h_ = max_iy - min_iy + 1 + 2 * reach;
-  if (window_w_ * window_h_ > kMaxWindowVoxels) return;
-  if (window_.size() < static_cast<std::size_t>(window_w_ * window_h_)) {
-    window_.resize(static_cast<std::size_t>(window_w_ * window_h_), nullptr);
-  }
-  windowed_ = true;
-  for (const auto& [key, v] : map_) {
-    if (structure_only_ && !structure(v)) continue;
-    const std::int64_t x = static_cast<std::int32_t>(key >> 32U) - window_x0_;
-    const std::int64_t y = static_cast<std::int32_t>(key & 0xffffffffU) - window_y0_;
-    if (x < 0 || x >= window_w_ || y < 0 || y >= window_h_) continue;
-    const auto at = static_cast<std::size_t>(y * window_w_ + x);
-    window_[at] = &v;
-    window_used_.push_back(at);
-  }
-}
-
-void ScanRegistration::close_window() {
-  for (const std::size_t at : window_used_) window_[at] = nullptr;  // All null between scans.
-  window_used_.clear();
-  windowed_ = false;
-  neighbourhood_valid_ = false;
-}
-
-const ScanRegistration::Voxel* ScanRegistration::voxel_in_map(std::int64_t x,
-                                                              std::int64_t y) const {
-  const auto it = map_.find(key_at(x, y));
-  return it == map_.end() || (structure_only_ && !structure(it->second)) ? nullptr : &it->second;
-}
-
-// Gathers sample point @p i's candidates at @p q (in the fixed frame); returns whether it has one.
-bool ScanRegistration::gather(std::size_t i, const Eigen::Vector2d& q, double threshold) {
-  const double voxel = config_.voxel_size_m;
-  const double radius = threshold + config_.max_correction_m;
   const double radius2 = radius * radius;
-  const int reach = static_cast<int>(std::ceil(threshold / voxel));
-  const auto ix = static_cast<std::int64_t>(std::floor(q.x() / voxel));
-  const auto iy = static_cast<std::int64_t>(std::floor(q.y() / voxel));
+  std::int32_t covered = 0;
   // Consecutive sample points mostly fall in the same voxel: its neighbourhood is looked up once.
-  if (!neighbourhood_valid_ || ix != neighbourhood_ix_ || iy != neighbourhood_iy_) {
-    neighbourhood_.clear();
-    for (std::int64_t x = ix - reach; x <= ix + reach; ++x) {
-      for (std::int64_t y = iy - reach; y <= iy + reach; ++y) {
-        const Voxel* v = voxel_at(x, y);
-        if (v == nullptr) continue;
-        neighbourhood_.push_back(
-            {v, static_cast<double>(x) * voxel, static_cast<double>(y) * voxel});
+  bool have_last = false;
+  std::int64_t last_ix = 0, last_iy = 0;
+  for (std::size_t i = 0; i < sample_.size(); ++i) {
+    candidate_begin_[i] = static_cast<std::int32_t>(candidate_points_.size());
+    const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
+    const auto ix = static_cast<std::int64_t>(std::floor(q.x() / config_.voxel_size_m));
+    const auto iy = static_cast<std::int64_t>(std::floor(q.y() / config_.voxel_size_m));
+    if (!have_last || ix != last_ix || iy != last_iy) {
+      neighbourhood_.clear();
+      for (std::int64_t x = ix - reach; x <= ix + reach; ++x) {
+        for (std::int64_t y = iy - reach; y <= iy + reach; ++y) {
+          const auto it = map_.find(key_at(x, y));
+          if (it == map_.end() || (structure_only && !structure(it->second))) continue;
+          neighbourhood_.push_back(&it->second);
+        }
+      }
+      have_last = true;
+      last_ix = ix;
+      last_iy = iy;
+    }
+    for (const Voxel* v : neighbourhood_) {
+      for (std::uint8_t j = 0; j < v->count; ++j) {
+        const Eigen::Vector2d point = v->points[j].cast<double>();
+        if ((point - q).squaredNorm() > radius2) continue;
+        candidate_points_.push_back(point);
+        candidate_normals_.push_back(v->normals[j].cast<double>());
       }
     }
-    neighbourhood_valid_ = true;
-    neighbourhood_ix_ = ix;
-    neighbourhood_iy_ = iy;
+    if (static_cast<std::int32_t>(candidate_points_.size()) > candidate_begin_[i]) ++covered;
   }
-  far_candidates_.clear();
-  Gathered& g = gathered_[i];
-  g.at = q;
-  g.begin = static_cast<std::int32_t>(candidates_.size());
-  for (const Neighbour& n : neighbourhood_) {
-    // A voxel none of whose points can be near enough is passed over.
-    const double gap_x = std::max({0.0, n.x0_m - q.x(), q.x() - (n.x0_m + voxel)});
-    const double gap_y = std::max({0.0, n.y0_m - q.y(), q.y() - (n.y0_m + voxel)});
-    if (gap_x * gap_x + gap_y * gap_y > radius2) continue;
-    const Voxel& v = *n.voxel;
-    for (std::uint8_t j = 0; j < v.count; ++j) {
-      const Eigen::Vector2d point = v.points[j].cast<double>();
-      const double d2 = (point - q).squaredNorm();
-      if (d2 > radius2) continue;
-      (d2 <= kNearRing_m * kNearRing_m ? candidates_ : far_candidates_)
-          .push_back({point, v.normals[j].cast<double>()});
-    }
-  }
-  g.split = static_cast<std::int32_t>(candidates_.size());
-  candidates_.insert(candidates_.end(), far_candidates_.begin(), far_candidates_.end());
-  g.end = static_cast<std::int32_t>(candidates_.size());
-  return g.end > g.begin;
-}
-
-// Gathers every sample point's candidates at @p pose; returns how many are covered (gather()).
-std::int32_t ScanRegistration::gather_all(const Pose2& pose, double threshold,
-                                          bool structure_only) {
-  structure_only_ = structure_only;
-  open_window(pose, static_cast<int>(std::ceil(threshold / config_.voxel_size_m)));
-  candidates_.clear();
-  gathered_.resize(sample_.size());
-  const PoseTransform to_fixed(pose);
-  std::int32_t covered = 0;
-  for (std::size_t i = 0; i < sample_.size(); ++i) {
-    if (gather(i, to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]), threshold)) {
-      ++covered;
-    }
-  }
-  close_window();
+  candidate_begin_[sample_.size()] = static_cast<std::int32_t>(candidate_points_.size());
   return covered;
 }
 
@@ -398,11 +316,16 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
     if (report.points < config_.min_points) {
       report.fallback = true;
     } else {
-      // Candidates: gathered at the seed. A young map (the first scans, or a scene that has just
-      // changed) has no structure yet: then every voxel is a candidate.
-      if (gather_all(seed, threshold, true) < config_.min_points) {
-        gather_all(seed, threshold, false);
+      // Candidates: the points of the voxels around each sample point at the seed, gathered
+      // once (the registration moves a point by less than the threshold).
+      // A young map (the first scans, or a scene that has just changed) has no structure yet:
+      // then every voxel is a candidate.
+      const int reach = static_cast<int>(std::ceil(threshold / config_.voxel_size_m));
+      if (gather_candidates(seed, reach, threshold + config_.max_correction_m, true) <
+          config_.min_points) {
+        gather_candidates(seed, reach, threshold + config_.max_correction_m, false);
       }
+
       const double kappa = threshold / 3.0;
       const double threshold2 = threshold * threshold;
       Eigen::Matrix3d h_data = Eigen::Matrix3d::Zero();
@@ -417,31 +340,19 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
         const PoseTransform to_fixed(pose);
         for (std::size_t i = 0; i < sample_.size(); ++i) {
           const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
-          const Gathered& gathered = gathered_[i];
           double best = threshold2;
-          const Candidate* found = nullptr;
-          const auto search = [&](std::int32_t from, std::int32_t to) {
-            for (std::int32_t j = from; j < to; ++j) {
-              const Candidate& candidate = candidates_[static_cast<std::size_t>(j)];
-              const double d2 = (candidate.point - q).squaredNorm();
-              if (d2 < best) {
-                best = d2;
-                found = &candidate;
-              }
+          std::int32_t found = -1;
+          for (std::int32_t j = candidate_begin_[i]; j < candidate_begin_[i + 1]; ++j) {
+            const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
+            if (d2 < best) {
+              best = d2;
+              found = j;
             }
-          };
-          search(gathered.begin, gathered.split);
-          // The far candidates were farther than kNearRing_m from the point at the seed, so at
-          // least kNearRing_m less how far it has moved since from it now: none is nearer than a
-          // near one found within that.
-          const double near_enough = kNearRing_m - (q - gathered.at).norm();
-          if (found == nullptr || near_enough <= 0.0 || best > near_enough * near_enough) {
-            search(gathered.split, gathered.end);
           }
-          if (found == nullptr) continue;
+          if (found < 0) continue;
           ++inliers;
-          const Eigen::Vector2d diff = q - found->point;
-          Eigen::Vector2d normal = found->normal;
+          const Eigen::Vector2d diff = q - candidate_points_[static_cast<std::size_t>(found)];
+          Eigen::Vector2d normal = candidate_normals_[static_cast<std::size_t>(found)];
           if (normal.squaredNorm() < 0.25) {  // No normal: point to point along the difference.
             if (best < 1e-18) continue;
             normal = diff / std::sqrt(best);

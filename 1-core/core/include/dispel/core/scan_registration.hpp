@@ -146,18 +146,7 @@ class ScanRegistration {
   static Key key_at(std::int64_t ix, std::int64_t iy);
   Key key_of(const Eigen::Vector2d& p) const;
   bool structure(const Voxel& v) const;
-  void open_window(const Pose2& pose, int reach);
-  void close_window();
-  const Voxel* voxel_at(std::int64_t x, std::int64_t y) const {
-    const std::int64_t wx = x - window_x0_, wy = y - window_y0_;
-    if (windowed_ && wx >= 0 && wx < window_w_ && wy >= 0 && wy < window_h_) {
-      return window_[static_cast<std::size_t>(wy * window_w_ + wx)];
-    }
-    return voxel_in_map(x, y);
-  }
-  const Voxel* voxel_in_map(std::int64_t x, std::int64_t y) const;
-  bool gather(std::size_t i, const Eigen::Vector2d& q, double threshold);
-  std::int32_t gather_all(const Pose2& pose, double threshold, bool structure_only);
+  std::int32_t gather_candidates(const Pose2& pose, int reach, double radius, bool structure_only);
   void thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s, bool deskew_wanted);
   Eigen::Vector2d normal_at(std::size_t b) const;
 
@@ -180,34 +169,11 @@ class ScanRegistration {
   std::vector<Eigen::Vector2d> world_points_;  // Per beam, in the fixed frame.
   BeamDirections directions_;                  // The scanner's beam directions.
   std::vector<std::int32_t> sample_;           // Beams used for registration.
-  // Candidate map points of each sampled point (gather(), gather_all()).
-  struct Neighbour {
-    const Voxel* voxel;
-    double x0_m, y0_m;  // The voxel's lower corner.
-  };
-  std::vector<Neighbour> neighbourhood_;  // The voxels around a sample point's voxel.
-  bool neighbourhood_valid_ = false;
-  std::int64_t neighbourhood_ix_ = 0, neighbourhood_iy_ = 0;
-  struct Candidate {
-    Eigen::Vector2d point;
-    Eigen::Vector2d normal;
-  };
-  // Each sample point's candidates: [begin, split) within kNearRing_m of it at the seed (at),
-  // [split, end) the others.
-  struct Gathered {
-    Eigen::Vector2d at;
-    std::int32_t begin, split, end;
-  };
-  std::vector<Gathered> gathered_;
-  std::vector<Candidate> candidates_;
-  std::vector<Candidate> far_candidates_;  // Scratch.
-  bool structure_only_ = true;             // Candidates are structure's points only.
-  // The map's voxels around the scan, densely (all null between registrations), and which are
-  // set.
-  std::vector<const Voxel*> window_;
-  std::vector<std::size_t> window_used_;
-  bool windowed_ = false;
-  std::int64_t window_x0_ = 0, window_y0_ = 0, window_w_ = 0, window_h_ = 0;
+  // Candidate map points of each sampled point (gathered once per registration).
+  std::vector<std::int32_t> candidate_begin_;
+  std::vector<const Voxel*> neighbourhood_;  // Scratch: the voxels around a sample point.
+  std::vector<Eigen::Vector2d> candidate_points_;
+  std::vector<Eigen::Vector2d> candidate_normals_;
   // explained(): the voxels that can explain points of one voxel, kept for the next beam.
   mutable std::vector<const Voxel*> explaining_;
   mutable bool explaining_valid_ = false;

@@ -103,6 +103,12 @@ DynamicFilter::DynamicFilter(DynamicFilterConfig config)
       free_space_(config_.free_space),
       registration_(config_.registration) {}
 
+DynamicFilter::DynamicFilter(DynamicFilterConfig config, FreeSpaceMap&& free_space)
+    : config_((config.validate(), std::move(config))),
+      segmenter_(config_.segmentation),
+      free_space_(config_.free_space, std::move(free_space)),
+      registration_(config_.registration) {}
+
 void DynamicFilter::reset() {
   counters_.tracks_dropped += static_cast<std::int64_t>(tracks_.size());
   tracks_.clear();

@@ -41,13 +41,22 @@ void FreeSpaceConfig::validate() const {
   }
 }
 
-FreeSpaceMap::FreeSpaceMap(FreeSpaceConfig config) : config_(config) {
-  config_.validate();
+FreeSpaceMap::FreeSpaceMap(FreeSpaceConfig config)
+    : FreeSpaceMap((config.validate(), config), Unallocated{}) {
+  allocate();
+}
+
+// The window's size from the configuration (validated); no memory yet.
+FreeSpaceMap::FreeSpaceMap(const FreeSpaceConfig& config, Unallocated /*unused*/)
+    : config_(config) {
   const auto cells_per_side =
       static_cast<std::int64_t>(std::ceil(config_.extent_m / config_.cell_size_m));
   tiles_per_side_ = (cells_per_side + kTileSide - 1) / kTileSide;
   if ((tiles_per_side_ & (tiles_per_side_ - 1)) == 0) slot_mask_ = tiles_per_side_ - 1;
   reach_tiles_ = (tiles_per_side_ - 1) / 2;
+}
+
+void FreeSpaceMap::allocate() {
   const auto slots = static_cast<std::size_t>(tiles_per_side_ * tiles_per_side_);
   // Zeroed here, once (a slot's cells are emptied again when its tile is started): the window's
   // memory is resident from the start. Left untouched, its pages came in one by one as a robot
@@ -55,6 +64,18 @@ FreeSpaceMap::FreeSpaceMap(FreeSpaceConfig config) : config_(config) {
   // docs/soak.md) and a scan now and then paid for page faults.
   cells_.reset(new Cell[slots * static_cast<std::size_t>(kTileCells)]());
   tags_.assign(slots, TileTag{0, 0, 0});  // Generation 0 is never current.
+}
+
+FreeSpaceMap::FreeSpaceMap(FreeSpaceConfig config, FreeSpaceMap&& earlier)
+    : FreeSpaceMap((config.validate(), config), Unallocated{}) {
+  if (earlier.cells_ != nullptr && earlier.tiles_per_side_ == tiles_per_side_) {
+    cells_ = std::move(earlier.cells_);
+    tags_ = std::move(earlier.tags_);
+    generation_ = earlier.generation_;
+    clear();  // Its tiles are not current here.
+  } else {
+    allocate();
+  }
 }
 
 void FreeSpaceMap::clear() {

@@ -274,6 +274,40 @@ TEST(FreeSpaceMap, ClearForgetsEverythingAtOnceAndTheMapStartsAgainWhereTheSenso
   EXPECT_LT(again, 2 * first);
 }
 
+// A map made from an earlier one (the runner makes the window before the first scan says how to
+// scale the filter) forgets everything the earlier one held and works as a new one; a window of
+// another size is made anew.
+TEST(FreeSpaceMap, AMapMadeFromAnEarlierOneStartsEmptyAndWorksTheSame) {
+  FreeSpaceConfig c;
+  FreeSpaceMap earlier(c);
+  for (int k = 0; k < 3; ++k) earlier.add_scan(ring(4.0F), Pose2{});
+  ASSERT_TRUE(earlier.known_free({1.0, 0.0}));
+  FreeSpaceConfig scaled = c;
+  scaled.min_free_observations = 2;
+  FreeSpaceMap map(scaled, std::move(earlier));
+  EXPECT_FALSE(map.known_free({1.0, 0.0}));
+  EXPECT_EQ(map.hit_balance({4.0, 0.0}), 0);
+  EXPECT_EQ(map.config().min_free_observations, 2);
+  FreeSpaceMap fresh(scaled);
+  for (int k = 0; k < 2; ++k) {
+    map.add_scan(ring(4.0F), Pose2{0.5, 0.0, 0.0});
+    fresh.add_scan(ring(4.0F), Pose2{0.5, 0.0, 0.0});
+  }
+  EXPECT_TRUE(map.known_free({1.5, 0.0}));
+  EXPECT_EQ(map.take_tiles_started(), fresh.take_tiles_started());
+  for (double x = -6.0; x <= 6.0; x += 0.25) {
+    for (double y = -6.0; y <= 6.0; y += 0.25) {
+      ASSERT_EQ(map.known_free({x, y}), fresh.known_free({x, y})) << x << " " << y;
+      ASSERT_EQ(map.hit_balance({x, y}), fresh.hit_balance({x, y})) << x << " " << y;
+    }
+  }
+  FreeSpaceConfig smaller = c;
+  smaller.extent_m = 51.2;
+  FreeSpaceMap other(smaller, std::move(map));
+  for (int k = 0; k < 3; ++k) other.add_scan(ring(4.0F), Pose2{});
+  EXPECT_TRUE(other.known_free({1.0, 0.0}));
+}
+
 TEST(FreeSpaceMap, PointsOutOfReachOrNotFiniteAreNeverFree) {
   FreeSpaceConfig c;
   FreeSpaceMap map(c);

@@ -29,7 +29,11 @@ void ScanFilterRunnerOptions::validate() const {
 
 ScanFilterRunner::ScanFilterRunner(ScanFilterRunnerOptions options)
     : options_((options.validate(), std::move(options))), period_(options_.scan_period_s) {
-  if (!options_.scale_to_scanner) filter_.emplace(options_.config);
+  if (options_.scale_to_scanner) {
+    free_space_.emplace(options_.config.free_space);
+  } else {
+    filter_.emplace(options_.config);
+  }
 }
 
 const DynamicFilterConfig& ScanFilterRunner::config() const {
@@ -81,7 +85,9 @@ ScanOutcome ScanFilterRunner::run(const LaserScan& scan, double stated_period_s,
     // scale_to_scanner: the first scan with a valid angle increment once the period is known.
     const std::optional<double> period = period_.add(scan.stamp_s, stated_period_s);
     if (period && std::isfinite(scan.angle_increment_rad) && scan.angle_increment_rad > 0.0) {
-      filter_.emplace(scale_to_scanner(options_.config, scan.angle_increment_rad, *period));
+      filter_.emplace(scale_to_scanner(options_.config, scan.angle_increment_rad, *period),
+                      std::move(*free_space_));
+      free_space_.reset();
     } else {
       const bool bad = check_scan(scan) != ScanIssue::kNone;
       DynamicFilter::pass_through_unfiltered(

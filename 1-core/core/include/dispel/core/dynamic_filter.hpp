@@ -137,6 +137,9 @@ class DynamicFilter {
  public:
   /// @throws std::invalid_argument if config.validate() does.
   explicit DynamicFilter(DynamicFilterConfig config);
+  /// The same, taking the free-space window of @p free_space, made earlier with the same
+  /// free-space settings (FreeSpaceMap's constructor from an earlier map).
+  DynamicFilter(DynamicFilterConfig config, FreeSpaceMap&& free_space);
 
   /// Filters one scan (thesis Figure 3.3). @p sensor_pose is the laser frame in the fixed frame
   /// (odometry) at scan.stamp_s, or std::nullopt when none is known. With the registration on,

@@ -72,6 +72,10 @@ struct FreeSpaceConfig {
 class FreeSpaceMap {
  public:
   explicit FreeSpaceMap(FreeSpaceConfig config);
+  /// A map with @p config that takes @p earlier's window when it is of the same size (the same
+  /// cell_size_m and extent_m), emptied: the window's memory is made and zeroed once, before the
+  /// first scan, even where the filter's settings are known only from it (scale_to_scanner).
+  FreeSpaceMap(FreeSpaceConfig config, FreeSpaceMap&& earlier);
 
   /// True when every cell within neighbourhood_cells of the point's cell is known free.
   bool known_free(const Eigen::Vector2d& point_m) const;
@@ -104,6 +108,9 @@ class FreeSpaceMap {
   }
 
  private:
+  struct Unallocated {};
+  FreeSpaceMap(const FreeSpaceConfig& config, Unallocated);  // The window's size, no memory.
+  void allocate();
   /// Trivially constructible: emptied by writing kEmptyCell when a tile is started.
   struct Cell {
     float last_free_s;        // When a beam last saw through it, seconds after epoch_s_.

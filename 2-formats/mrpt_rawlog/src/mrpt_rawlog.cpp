@@ -27,6 +27,17 @@ namespace {
 constexpr std::int64_t kTicksPerSecond = 10000000;
 constexpr std::int64_t kUnixEpochTicks = 116444736000000000;
 
+// A bool member that MRPT's deserialisation filled from the file: it copies the file's byte into
+// the bool, so the bool can hold any byte (Debian's localization_demo.rawlog has 90 in
+// CActionRobotMovement2D::hasVelocities), and loading it as a bool is undefined behaviour. Its
+// byte is read instead: any byte but 0 is true, as MRPT's own code takes it.
+static_assert(sizeof(bool) == 1, "a bool is one byte");
+bool stored_flag(const bool& flag) {
+  unsigned char byte = 0;
+  std::memcpy(&byte, &flag, 1);
+  return byte != 0;
+}
+
 bool has_stamp(const mrpt::Clock::time_point& t) { return t != mrpt::Clock::time_point(); }
 
 Stamp to_stamp(const mrpt::Clock::time_point& t) {
@@ -115,17 +126,60 @@ ScanMessage scan_message_of(const mrpt::obs::CObservation2DRangeScan& s, const S
   scan.range_min_m = 0.0F;
   scan.range_max_m = s.maxRange;
   scan.ranges_m.resize(n);
-  if (s.hasIntensity()) scan.intensities.resize(n);
+  // hasIntensity() returns a stored flag too (out of line, in MRPT): stored_flag reads the byte
+  // it returned.
+  const bool returned = s.hasIntensity();
+  const bool intensity = stored_flag(returned);
+  const bool right_to_left = stored_flag(s.rightToLeft);
+  if (intensity) scan.intensities.resize(n);
   for (std::size_t k = 0; k < n; ++k) {
     // Right to left: beam k is at angle_min + k * increment. Otherwise the beams are mirrored:
     // MRPT's beam k is at +aperture/2 - k * increment, our beam n-1-k.
-    const std::size_t i = s.rightToLeft ? k : n - 1 - k;
+    const std::size_t i = right_to_left ? k : n - 1 - k;
     scan.ranges_m[k] =
         s.getScanRangeValidity(i) ? s.getScanRange(i) : std::numeric_limits<float>::quiet_NaN();
-    if (s.hasIntensity()) scan.intensities[k] = static_cast<float>(s.getScanIntensity(i));
+    if (intensity) scan.intensities[k] = static_cast<float>(s.getScanIntensity(i));
   }
   m.angle_max = static_cast<float>(n > 1 ? aperture / 2.0 : scan.angle_min_rad);
   return m;
+}
+
+// MRPT sizes a container from the count it reads before it reads any element: a CSensoryFrame
+// of 0x746e0001 observations had a deque of 31 GiB of pointers made and zeroed, page by page,
+// from a 1.7 kB file (the fuzzer, in its first minute). The counts of the two containers a log's
+// top level is made of are checked against the bytes left before MRPT reads the object: each
+// element is an object of at least one byte. An object as MRPT 2 stores it: a byte 0x80 | the
+// length of the class's name, the name, a version byte, the object's fields. The check's message,
+// or empty when the object at @p pos is not one of these (MRPT reads and checks the rest).
+std::string container_count_error(const std::string& bytes, std::size_t pos) {
+  if (pos >= bytes.size()) return {};
+  const auto head = static_cast<unsigned char>(bytes[pos]);
+  if ((head & 0x80U) == 0) return {};
+  const std::size_t name_length = head & 0x7FU;
+  const std::size_t version_at = pos + 1 + name_length;
+  if (version_at >= bytes.size()) return {};
+  const std::string name = bytes.substr(pos + 1, name_length);
+  const auto version = static_cast<unsigned char>(bytes[version_at]);
+  std::size_t count_at = 0;
+  const char* what = nullptr;
+  if (name == "CSensoryFrame" && version == 2) {
+    count_at = version_at + 1;
+    what = "observations";
+  } else if (name == "CActionCollection" && version == 0) {
+    count_at = version_at + 1;
+    what = "actions";
+  } else {
+    return {};
+  }
+  if (count_at + 4 > bytes.size()) return {};  // MRPT finds it truncated.
+  std::uint32_t count = 0;
+  for (std::size_t k = 0; k < 4; ++k) {  // Little-endian, as MRPT stores it.
+    count |= static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[count_at + k])) << (8 * k);
+  }
+  const std::size_t left = bytes.size() - (count_at + 4);
+  if (count <= left) return {};
+  return "a " + name + " of " + std::to_string(count) + " " + what + " in the " +
+         std::to_string(left) + " bytes left";
 }
 
 constexpr const char* kOdomTopic = "/odom";
@@ -174,8 +228,9 @@ class Converter {
     integrating_ = true;
     const mrpt::poses::CPose2D d = move->poseChange->getMeanVal();
     pose_ = pose_ * Pose2{d.x(), d.y(), d.phi()};
-    v_ = move->hasVelocities ? move->velocityLocal.vx : 0.0;
-    w_ = move->hasVelocities ? move->velocityLocal.omega : 0.0;
+    const bool velocities = stored_flag(move->hasVelocities);
+    v_ = velocities ? move->velocityLocal.vx : 0.0;
+    w_ = velocities ? move->velocityLocal.omega : 0.0;
     // MRPT's actions-observations convention: an action is the robot's motion from the previous
     // sensory frame to the next one (what CMetricMapBuilder::processActionObservation composes
     // before it inserts that frame), so the pose it leads to is the next frame's. Its own stamp
@@ -222,9 +277,9 @@ class Converter {
       laser(*scan, stamp);
     } else if (auto odom = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(o)) {
       const mrpt::poses::CPose2D& p = odom->odometry;
-      odometry_entry(stamp, Pose2{p.x(), p.y(), p.phi()},
-                     odom->hasVelocities ? odom->velocityLocal.vx : 0.0,
-                     odom->hasVelocities ? odom->velocityLocal.omega : 0.0);
+      const bool velocities = stored_flag(odom->hasVelocities);
+      odometry_entry(stamp, Pose2{p.x(), p.y(), p.phi()}, velocities ? odom->velocityLocal.vx : 0.0,
+                     velocities ? odom->velocityLocal.omega : 0.0);
     } else {
       skip(*o);
     }
@@ -295,6 +350,14 @@ MrptRawlogReader::MrptRawlogReader(const std::string& path) : impl_(std::make_un
   // truncated or corrupt log.
   while (stream.getPosition() < bytes.size()) {
     mrpt::serialization::CSerializable::Ptr obj;
+    const std::string count_error =
+        container_count_error(bytes, static_cast<std::size_t>(stream.getPosition()));
+    if (!count_error.empty()) {
+      throw InputError(path + ": not a readable MRPT rawlog (" +
+                       (objects == 0 ? std::string()
+                                     : "corrupt after " + std::to_string(objects) + " objects: ") +
+                       count_error + ")");
+    }
     try {
       obj = archive.ReadObject();
     } catch (const std::exception& e) {

@@ -216,5 +216,34 @@ TEST_F(MrptRawlogSena, CorruptCompressedCopyIsRefused) {
   expect_unreadable(write_text("corrupt.rawlog", bytes), "corrupt");
 }
 
+// A container's count is checked against the bytes left before MRPT reads it: MRPT sizes the
+// container first (a CSensoryFrame of 0x746e0001 observations: a deque of 31 GiB, made page by
+// page, from the fuzzer). The first sensory frame's count, then the first action collection's
+// (after 2049 bytes), set past the end of the log.
+TEST_F(MrptRawlogSena, ContainerCountsBeyondTheLogAreRefusedBeforeMrptReadsThem) {
+  const std::string bytes = uncompressed(kSena);
+  ASSERT_EQ(bytes.substr(0, 15),
+            "\x8D"
+            "CSensoryFrame\x02");
+  ASSERT_EQ(bytes.substr(2049, 19),
+            "\x91"
+            "CActionCollection\x00");
+  std::string frame = bytes;
+  frame.replace(15, 4, "\x01\x00\x6e\x74");
+  EXPECT_EQ(open_error(write_text("frame_count.rawlog", frame)),
+            temp_path("frame_count.rawlog") +
+                ": not a readable MRPT rawlog (a CSensoryFrame of 1953366017 observations in the " +
+                std::to_string(bytes.size() - 19) + " bytes left)");
+  std::string actions = bytes;
+  actions.replace(2049 + 19, 4, "\xff\xff\xff\xff");
+  EXPECT_EQ(open_error(write_text("action_count.rawlog", actions)),
+            temp_path("action_count.rawlog") +
+                ": not a readable MRPT rawlog (corrupt after 1 objects: a CActionCollection of "
+                "4294967295 actions in the " +
+                std::to_string(bytes.size() - 2049 - 23) + " bytes left)");
+  // A count the log can hold is MRPT's to read (here the frame's one observation).
+  EXPECT_EQ(open_error(write_text("fine.rawlog", bytes)), "");
+}
+
 }  // namespace
 }  // namespace dispel::io

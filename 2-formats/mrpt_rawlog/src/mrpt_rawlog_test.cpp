@@ -255,7 +255,7 @@ TEST_F(MrptRawlogSena, MatricesLargerThanTheLogAreRefusedBeforeMrptReadsThem) {
                                               "CMatrixD\x00\x04\x00\x00\x00\x04\x00\x00\x00",
                                               18));
   std::string matrix = bytes;
-  matrix.replace(71, 8, std::string("\x00\x00\x04\x00\x04\x00\x00\x4d", 8));
+  matrix.replace(72, 8, std::string("\x00\x00\x04\x00\x04\x00\x00\x4d", 8));
   EXPECT_EQ(open_error(write_text("matrix.rawlog", matrix)),
             temp_path("matrix.rawlog") +
                 ": not a readable MRPT rawlog (a CMatrixD of 262144 x 1291845636 values at byte "
@@ -263,7 +263,7 @@ TEST_F(MrptRawlogSena, MatricesLargerThanTheLogAreRefusedBeforeMrptReadsThem) {
                 std::to_string(bytes.size() - 80) + " bytes after it)");
   // 4 x 5 doubles: more than the bytes after it only at the log's end, so MRPT reads it (and
   // finds the log corrupt).
-  matrix.replace(71, 8, std::string("\x04\x00\x00\x00\x05\x00\x00\x00", 8));
+  matrix.replace(72, 8, std::string("\x04\x00\x00\x00\x05\x00\x00\x00", 8));
   const std::string error = open_error(write_text("matrix_4x5.rawlog", matrix));
   EXPECT_NE(error, "");
   EXPECT_EQ(error.find("CMatrixD of"), std::string::npos) << error;

@@ -20,6 +20,7 @@
 #include <utility>
 
 #include "dispel/io/errors.hpp"
+#include "dispel/io/text.hpp"
 
 namespace dispel::io {
 namespace {
@@ -280,8 +281,8 @@ std::string movement_error(const std::string& bytes) {
     if (method != 0) {
       if (inner.compare(0, 8, "CPosePDF") == 0) continue;
       return "a CActionRobotMovement2D at byte " + std::to_string(start) +
-             " of estimation method " + std::to_string(method) + " whose pose change is a " +
-             inner + ", not a CPosePDF";
+             " of estimation method " + std::to_string(method) + " whose pose change is " +
+             quote(inner) + ", not a CPosePDF";  // The name is the file's bytes: quoted.
     }
     // Odometry: a CPose2D of version 1 (3 doubles, the end byte), then the model (4 bytes), 6
     // floats, the number of particles.

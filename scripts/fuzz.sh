@@ -9,8 +9,9 @@
 # build-fuzz/artifacts/<target>/, is printed with its path, and makes the script exit 1.
 # tests/fuzz/<target>.dict, when there is one, is the target's libFuzzer dictionary;
 # tests/fuzz/<target>.options, when there is one, adds libFuzzer options (a line of words, # for
-# comments): mrpt_rawlog runs in fork mode, its out-of-memory and timeout inputs (MRPT's own
-# allocations, docs/fuzzing.md) kept in its artifacts and counted but not failed.
+# comments): mrpt_rawlog runs in fork mode, its out-of-memory and timeout inputs and the crashes
+# that are ASan's failed `new` (MRPT's own allocations, docs/fuzzing.md) kept in its artifacts
+# and counted but not failed.
 # Replay one: build-fuzz/tests/fuzz/fuzz_<target> <input>.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -74,9 +75,11 @@ for t in "${targets[@]}"; do
     esac
   done
   rc=0
-  # Leaks are checked (ASan's default); -error_exitcode is libFuzzer's for any finding. An
-  # allocation the allocator cannot make throws std::bad_alloc, as it does outside ASan (one
-  # above 4 GiB that it can make is libFuzzer's out-of-memory, -rss_limit_mb).
+  # Leaks are checked (ASan's default); -error_exitcode is libFuzzer's for any finding. A malloc
+  # (aligned_alloc, ...) the allocator cannot serve returns null, as it does outside ASan, so
+  # that what the code does with that null is seen (MRPT's matrices wrote through it); a `new` it
+  # cannot serve still aborts (ASan's), where outside ASan it throws std::bad_alloc. One above
+  # 4 GiB that it can serve is libFuzzer's out-of-memory (-rss_limit_mb).
   ASAN_OPTIONS=abort_on_error=0:detect_leaks=1:allocator_may_return_null=1 \
     UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
     "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \

@@ -7,7 +7,11 @@
 # files targets.txt names), in build-fuzz/corpus/<target>/. Prints one line per target (runs,
 # result); a crash, leak, timeout (10 s) or out-of-memory (4 GiB) leaves its input in
 # build-fuzz/artifacts/<target>/, is printed with its path, and makes the script exit 1.
-# tests/fuzz/<target>.dict, when there is one, is the target's libFuzzer dictionary.
+# tests/fuzz/<target>.dict, when there is one, is the target's libFuzzer dictionary;
+# tests/fuzz/<target>.options, when there is one, adds libFuzzer options (a line of words, # for
+# comments): mrpt_rawlog runs in fork mode, its out-of-memory and timeout inputs and the crashes
+# that are ASan's failed `new` (MRPT's own allocations, docs/fuzzing.md) kept in its artifacts
+# and counted but not failed.
 # Replay one: build-fuzz/tests/fuzz/fuzz_<target> <input>.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -34,7 +38,7 @@ done
 build=build-fuzz
 CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DDISPEL_FUZZ=ON -DDISPEL_BUILD_TESTS=OFF \
-  -DDISPEL_BUILD_APPS=OFF -DDISPEL_BUILD_BENCHMARKS=OFF -DDISPEL_WITH_MRPT_RAWLOG=OFF \
+  -DDISPEL_BUILD_APPS=OFF -DDISPEL_BUILD_BENCHMARKS=OFF -DDISPEL_WITH_MRPT_RAWLOG=ON \
   -DDISPEL_WITH_ROS1=OFF >/dev/null
 build_targets=()
 for t in "${targets[@]}"; do build_targets+=(--target "fuzz_$t"); done
@@ -55,22 +59,66 @@ for t in "${targets[@]}"; do
   echo "fuzz: $t for $seconds s on $(find "$corpus" -type f | wc -l) seeds (log: $log)"
   dict=()
   [ -f "tests/fuzz/$t.dict" ] && dict=(-dict="tests/fuzz/$t.dict")
+  options=()
+  if [ -f "tests/fuzz/$t.options" ]; then
+    read -r -a options < <(sed 's/#.*//' "tests/fuzz/$t.options" | tr '\n' ' ') || true
+  fi
+  ignored_kinds=()
+  ignore_crashes=0
+  limits=(-rss_limit_mb=4096)
+  for o in "${options[@]}"; do
+    case "$o" in
+      -ignore_ooms=1) ignored_kinds+=(oom) ;;
+      -ignore_timeouts=1) ignored_kinds+=(timeout) ;;
+      -ignore_crashes=1) ignore_crashes=1 ;;
+      -malloc_limit_mb=*) limits+=("$o") ;;
+    esac
+  done
   rc=0
-  # Leaks are checked (ASan's default); -error_exitcode is libFuzzer's for any finding.
-  ASAN_OPTIONS=abort_on_error=0:detect_leaks=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+  # Leaks are checked (ASan's default); -error_exitcode is libFuzzer's for any finding. A malloc
+  # (aligned_alloc, ...) the allocator cannot serve returns null, as it does outside ASan, so
+  # that what the code does with that null is seen (MRPT's matrices wrote through it); a `new` it
+  # cannot serve still aborts (ASan's), where outside ASan it throws std::bad_alloc. One above
+  # 4 GiB that it can serve is libFuzzer's out-of-memory (-rss_limit_mb).
+  ASAN_OPTIONS=abort_on_error=0:detect_leaks=1:allocator_may_return_null=1 \
+    UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
     "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
     -max_len="${max_len[$t]}" -artifact_prefix="$artifacts/" -print_final_stats=1 \
-    "${dict[@]}" "$corpus" >"$log" 2>&1 || rc=$?
+    "${dict[@]}" "${options[@]}" "$corpus" >"$log" 2>&1 || rc=$?
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   [ -n "$runs" ] || runs=$(grep -o '#[0-9]*' "$log" | tail -1 | tr -d '#')
-  found=$(find "$artifacts" -type f | head -1)
+  # With -ignore_crashes=1 the run goes on after a crash, but only one kind of crash is ignored:
+  # an allocation ASan's allocator cannot make (it aborts where the process would get
+  # std::bad_alloc). Each crash input is replayed; one of that kind is renamed oom-asan-*, any
+  # other stays a crash and fails the run.
+  if [ $ignore_crashes -eq 1 ]; then
+    for c in $(find "$artifacts" -type f -name 'crash-*'); do
+      replay=$(ASAN_OPTIONS=abort_on_error=0:detect_leaks=1:allocator_may_return_null=1 \
+        UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 timeout 120 \
+        "$build/tests/fuzz/fuzz_$t" "${limits[@]}" "$c" 2>&1 || true)
+      if grep -qE 'SUMMARY: AddressSanitizer: (out-of-memory|allocation-size-too-big)' <<<"$replay"; then
+        mv "$c" "$artifacts/oom-asan-${c##*/crash-}"
+      fi
+    done
+  fi
+  ignored=""
+  not_ignored=()
+  for k in "${ignored_kinds[@]}"; do
+    n=$(find "$artifacts" -type f -name "$k-*" | wc -l)
+    [ "$n" -eq 0 ] || ignored+=", $n $k inputs ignored (docs/fuzzing.md) in $artifacts"
+    not_ignored+=(! -name "$k-*")
+  done
+  found=$(find "$artifacts" -type f "${not_ignored[@]}" | head -1)
+  # In fork mode libFuzzer exits with the code of its last failed job, an ignored one too: the
+  # run failed when it left an input that is not ignored, or failed and left none.
+  [ -n "$ignored" ] && [ -z "$found" ] && rc=0
   if [ $rc -ne 0 ] || [ -n "$found" ]; then
     failed=1
     kind=$(grep -m1 -oE 'ERROR: (AddressSanitizer|LeakSanitizer|libFuzzer|UndefinedBehaviorSanitizer)[^(]*|runtime error: .*|fuzz: the error .{0,80}' "$log" || true)
     summary+=("$t: FAILED after ${runs:-?} runs (exit $rc): ${kind:-see $log}; input: ${found:-none}")
     tail -n 40 "$log" >&2
   else
-    summary+=("$t: ok, ${runs:-?} runs in $seconds s, corpus $(find "$corpus" -type f | wc -l) inputs")
+    summary+=("$t: ok, ${runs:-?} runs in $seconds s, corpus $(find "$corpus" -type f | wc -l) inputs$ignored")
   fi
 done
 printf 'fuzz: %s\n' "${summary[@]}"

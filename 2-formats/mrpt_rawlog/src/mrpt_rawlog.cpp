@@ -17,8 +17,10 @@
 #include <fstream>
 #include <limits>
 #include <set>
+#include <utility>
 
 #include "dispel/io/errors.hpp"
+#include "dispel/io/text.hpp"
 
 namespace dispel::io {
 namespace {
@@ -26,6 +28,17 @@ namespace {
 // MRPT's time stamps count 100 ns since 1601-01-01 (mrpt::Clock); the Unix epoch is this many.
 constexpr std::int64_t kTicksPerSecond = 10000000;
 constexpr std::int64_t kUnixEpochTicks = 116444736000000000;
+
+// A bool member that MRPT's deserialisation filled from the file: it copies the file's byte into
+// the bool, so the bool can hold any byte (Debian's localization_demo.rawlog has 90 in
+// CActionRobotMovement2D::hasVelocities), and loading it as a bool is undefined behaviour. Its
+// byte is read instead: any byte but 0 is true, as MRPT's own code takes it.
+static_assert(sizeof(bool) == 1, "a bool is one byte");
+bool stored_flag(const bool& flag) {
+  unsigned char byte = 0;
+  std::memcpy(&byte, &flag, 1);
+  return byte != 0;
+}
 
 bool has_stamp(const mrpt::Clock::time_point& t) { return t != mrpt::Clock::time_point(); }
 
@@ -115,17 +128,176 @@ ScanMessage scan_message_of(const mrpt::obs::CObservation2DRangeScan& s, const S
   scan.range_min_m = 0.0F;
   scan.range_max_m = s.maxRange;
   scan.ranges_m.resize(n);
-  if (s.hasIntensity()) scan.intensities.resize(n);
+  // hasIntensity() returns a stored flag too (out of line, in MRPT): stored_flag reads the byte
+  // it returned.
+  const bool returned = s.hasIntensity();
+  const bool intensity = stored_flag(returned);
+  const bool right_to_left = stored_flag(s.rightToLeft);
+  if (intensity) scan.intensities.resize(n);
   for (std::size_t k = 0; k < n; ++k) {
     // Right to left: beam k is at angle_min + k * increment. Otherwise the beams are mirrored:
     // MRPT's beam k is at +aperture/2 - k * increment, our beam n-1-k.
-    const std::size_t i = s.rightToLeft ? k : n - 1 - k;
+    const std::size_t i = right_to_left ? k : n - 1 - k;
     scan.ranges_m[k] =
         s.getScanRangeValidity(i) ? s.getScanRange(i) : std::numeric_limits<float>::quiet_NaN();
-    if (s.hasIntensity()) scan.intensities[k] = static_cast<float>(s.getScanIntensity(i));
+    if (intensity) scan.intensities[k] = static_cast<float>(s.getScanIntensity(i));
   }
   m.angle_max = static_cast<float>(n > 1 ? aperture / 2.0 : scan.angle_min_rad);
   return m;
+}
+
+std::uint32_t u32_at(const std::string& bytes, std::size_t at) {
+  std::uint32_t v = 0;
+  for (std::size_t k = 0; k < 4; ++k) {  // Little-endian, as MRPT stores it.
+    v |= static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[at + k])) << (8 * k);
+  }
+  return v;
+}
+
+// MRPT sizes a container from the count it reads before it reads any element: a CSensoryFrame
+// of 0x746e0001 observations had a deque of 31 GiB of pointers made and zeroed, page by page,
+// from a 1.7 kB file (the fuzzer, in its first minute). The counts of the two containers a log's
+// top level is made of are checked against the bytes left before MRPT reads the object: each
+// element is an object of at least one byte. An object as MRPT 2 stores it: a byte 0x80 | the
+// length of the class's name, the name, a version byte, the object's fields. The check's message,
+// or empty when the object at @p pos is not one of these (MRPT reads and checks the rest).
+std::string container_count_error(const std::string& bytes, std::size_t pos) {
+  if (pos >= bytes.size()) return {};
+  const auto head = static_cast<unsigned char>(bytes[pos]);
+  if ((head & 0x80U) == 0) return {};
+  const std::size_t name_length = head & 0x7FU;
+  const std::size_t version_at = pos + 1 + name_length;
+  if (version_at >= bytes.size()) return {};
+  std::string name = bytes.substr(pos + 1, name_length);
+  // MRPT 2 writes the class's full name (mrpt::obs::CSensoryFrame), older MRPT the short one.
+  const std::size_t colons = name.rfind("::");
+  if (colons != std::string::npos) name.erase(0, colons + 2);
+  const auto version = static_cast<unsigned char>(bytes[version_at]);
+  std::size_t count_at = 0;
+  const char* what = nullptr;
+  if (name == "CSensoryFrame" && version == 2) {
+    count_at = version_at + 1;
+    what = "observations";
+  } else if (name == "CActionCollection" && version == 0) {
+    count_at = version_at + 1;
+    what = "actions";
+  } else {
+    return {};
+  }
+  if (count_at + 4 > bytes.size()) return {};  // MRPT finds it truncated.
+  const std::uint32_t count = u32_at(bytes, count_at);
+  const std::size_t left = bytes.size() - (count_at + 4);
+  if (count <= left) return {};
+  return "a " + name + " of " + std::to_string(count) + " " + what + " in the " +
+         std::to_string(left) + " bytes left";
+}
+
+// Where a stored object of class @p name starts when its name is at @p at: the header byte
+// before it (0x80 | the stored name's length), the name alone or after @p space ("mrpt::math::").
+// npos when the bytes there are not such a header.
+std::size_t object_start(const std::string& bytes, std::size_t at, const std::string& name,
+                         const std::string& space) {
+  if (at >= 1 && static_cast<unsigned char>(bytes[at - 1]) == (0x80U | name.size())) {
+    return at - 1;
+  }
+  const std::string full = space + name;
+  if (at >= space.size() + 1 && bytes.compare(at - space.size(), full.size(), full) == 0 &&
+      static_cast<unsigned char>(bytes[at - space.size() - 1]) == (0x80U | full.size())) {
+    return at - space.size() - 1;
+  }
+  return std::string::npos;
+}
+
+// The stored object's class name at @p pos (without its namespace), and where its version byte
+// is; empty when there is no header of MRPT 2's form there.
+std::pair<std::string, std::size_t> object_header(const std::string& bytes, std::size_t pos) {
+  if (pos >= bytes.size()) return {};
+  const auto head = static_cast<unsigned char>(bytes[pos]);
+  if ((head & 0x80U) == 0) return {};
+  const std::size_t version_at = pos + 1 + (head & 0x7FU);
+  if (version_at >= bytes.size()) return {};
+  std::string name = bytes.substr(pos + 1, head & 0x7FU);
+  const std::size_t colons = name.rfind("::");
+  if (colons != std::string::npos) name.erase(0, colons + 2);
+  return {name, version_at};
+}
+
+// MRPT makes a matrix object's storage (rows x cols, with its aligned allocator) before it reads
+// the values, and does not check the allocation: when it cannot be made MRPT writes through a
+// null pointer (SIGSEGV, with or without ASan: a CMatrixD of 262144 x 1291845636 doubles, the
+// mount pose of a scan, from the fuzzer). Every stored CMatrixD and CMatrixF object (version 0:
+// rows, cols, the values) is found in the log's bytes, at any depth, and one with more values
+// than the bytes after it refuses the log before MRPT reads any of it. (The 9 or more bytes of a
+// matrix's header are not checked for where they stand; inside another field's bytes they would
+// be a coincidence of 2^-72 per byte.) The check's message, or empty.
+std::string oversized_matrix_error(const std::string& bytes) {
+  struct Kind {
+    const char* name;
+    std::size_t value_bytes;
+  };
+  for (const Kind kind : {Kind{"CMatrixD", 8}, Kind{"CMatrixF", 4}}) {
+    const std::string name = kind.name;
+    for (std::size_t at = bytes.find(name); at != std::string::npos;
+         at = bytes.find(name, at + 1)) {
+      const std::size_t start = object_start(bytes, at, name, "mrpt::math::");
+      const std::size_t version_at = at + name.size();
+      if (start == std::string::npos || version_at + 9 > bytes.size() || bytes[version_at] != 0) {
+        continue;
+      }
+      const std::uint64_t rows = u32_at(bytes, version_at + 1);
+      const std::uint64_t cols = u32_at(bytes, version_at + 5);
+      const std::uint64_t left = bytes.size() - (version_at + 9);
+      // rows * cols * value_bytes may not fit in 64 bits (2^32 * 2^32 * 8): divided instead.
+      if (rows == 0 || cols <= left / kind.value_bytes / rows) continue;
+      return "a " + name + " of " + std::to_string(rows) + " x " + std::to_string(cols) +
+             " values at byte " + std::to_string(start) + ", more than the " +
+             std::to_string(left) + " bytes after it";
+    }
+  }
+  return {};
+}
+
+// A CActionRobotMovement2D (versions 4 to 7: the estimation method, then for odometry the raw
+// increment, a CPose2D, and the motion model's parameters; otherwise the pose change, a CPosePDF)
+// that MRPT cannot read safely:
+// - another estimation method than odometry with an object that is not a CPosePDF where the pose
+//   change is: MRPT casts it to a CPosePDF, gets null, and copies through it (SIGSEGV, from the
+//   fuzzer: the method of Debian's localization_demo's first action changed);
+// - Thrun's motion model (1) with more than kMaxParticles particles: MRPT draws them all when it
+//   reads the action (2^32 - 1 at most: hundreds of GiB).
+// The check's message, or empty.
+constexpr std::uint32_t kMaxParticles = 100000;
+std::string movement_error(const std::string& bytes) {
+  const std::string name = "CActionRobotMovement2D";
+  for (std::size_t at = bytes.find(name); at != std::string::npos; at = bytes.find(name, at + 1)) {
+    const std::size_t start = object_start(bytes, at, name, "mrpt::obs::");
+    const std::size_t version_at = at + name.size();
+    if (start == std::string::npos || version_at + 5 > bytes.size()) continue;
+    const auto version = static_cast<unsigned char>(bytes[version_at]);
+    if (version < 4 || version > 7) continue;
+    const std::uint32_t method = u32_at(bytes, version_at + 1);
+    const auto [inner, inner_version_at] = object_header(bytes, version_at + 5);
+    if (inner.empty()) continue;  // MRPT refuses what follows.
+    if (method != 0) {
+      if (inner.compare(0, 8, "CPosePDF") == 0) continue;
+      return "a CActionRobotMovement2D at byte " + std::to_string(start) +
+             " of estimation method " + std::to_string(method) + " whose pose change is " +
+             quote(inner) + ", not a CPosePDF";  // The name is the file's bytes: quoted.
+    }
+    // Odometry: a CPose2D of version 1 (3 doubles, the end byte), then the model (4 bytes), 6
+    // floats, the number of particles.
+    if (inner != "CPose2D" || bytes[inner_version_at] != 1) continue;
+    const std::size_t model_at = inner_version_at + 1 + 24 + 1;
+    if (model_at + 4 + 24 + 4 > bytes.size()) continue;
+    const std::uint32_t model = u32_at(bytes, model_at);
+    const std::uint32_t particles = u32_at(bytes, model_at + 4 + 24);
+    if (model == 1 && particles > kMaxParticles) {
+      return "a CActionRobotMovement2D at byte " + std::to_string(start) + " asking for " +
+             std::to_string(particles) + " particles of Thrun's motion model (more than " +
+             std::to_string(kMaxParticles) + ")";
+    }
+  }
+  return {};
 }
 
 constexpr const char* kOdomTopic = "/odom";
@@ -172,10 +344,15 @@ class Converter {
       odometry_entry(*first_observation_, Pose2{}, 0.0, 0.0);
     }
     integrating_ = true;
+    if (!move->poseChange) {  // MRPT leaves none when it read no pose change.
+      skip(*a);
+      return;
+    }
     const mrpt::poses::CPose2D d = move->poseChange->getMeanVal();
     pose_ = pose_ * Pose2{d.x(), d.y(), d.phi()};
-    v_ = move->hasVelocities ? move->velocityLocal.vx : 0.0;
-    w_ = move->hasVelocities ? move->velocityLocal.omega : 0.0;
+    const bool velocities = stored_flag(move->hasVelocities);
+    v_ = velocities ? move->velocityLocal.vx : 0.0;
+    w_ = velocities ? move->velocityLocal.omega : 0.0;
     // MRPT's actions-observations convention: an action is the robot's motion from the previous
     // sensory frame to the next one (what CMetricMapBuilder::processActionObservation composes
     // before it inserts that frame), so the pose it leads to is the next frame's. Its own stamp
@@ -222,9 +399,9 @@ class Converter {
       laser(*scan, stamp);
     } else if (auto odom = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(o)) {
       const mrpt::poses::CPose2D& p = odom->odometry;
-      odometry_entry(stamp, Pose2{p.x(), p.y(), p.phi()},
-                     odom->hasVelocities ? odom->velocityLocal.vx : 0.0,
-                     odom->hasVelocities ? odom->velocityLocal.omega : 0.0);
+      const bool velocities = stored_flag(odom->hasVelocities);
+      odometry_entry(stamp, Pose2{p.x(), p.y(), p.phi()}, velocities ? odom->velocityLocal.vx : 0.0,
+                     velocities ? odom->velocityLocal.omega : 0.0);
     } else {
       skip(*o);
     }
@@ -286,6 +463,10 @@ struct MrptRawlogReader::Impl {
 MrptRawlogReader::MrptRawlogReader(const std::string& path) : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
   const std::string bytes = read_file(path);
+  // What MRPT would crash on or grow without bound from, refused before it reads anything.
+  for (const std::string& error : {oversized_matrix_error(bytes), movement_error(bytes)}) {
+    if (!error.empty()) throw InputError(path + ": not a readable MRPT rawlog (" + error + ")");
+  }
   mrpt::io::CMemoryStream stream;
   stream.assignMemoryNotOwn(bytes.data(), bytes.size());
   auto archive = mrpt::serialization::archiveFrom(stream);
@@ -295,6 +476,14 @@ MrptRawlogReader::MrptRawlogReader(const std::string& path) : impl_(std::make_un
   // truncated or corrupt log.
   while (stream.getPosition() < bytes.size()) {
     mrpt::serialization::CSerializable::Ptr obj;
+    const std::string count_error =
+        container_count_error(bytes, static_cast<std::size_t>(stream.getPosition()));
+    if (!count_error.empty()) {
+      throw InputError(path + ": not a readable MRPT rawlog (" +
+                       (objects == 0 ? std::string()
+                                     : "corrupt after " + std::to_string(objects) + " objects: ") +
+                       count_error + ")");
+    }
     try {
       obj = archive.ReadObject();
     } catch (const std::exception& e) {

@@ -13,7 +13,10 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 
+#include "dispel/io/errors.hpp"
 #include "dispel/io/mrpt_rawlog.hpp"
 #include "test_files.hpp"
 
@@ -167,6 +170,42 @@ TEST(MrptRawlogSynthetic, AnActionsPoseIsStatedAtTheNextSensoryFrame) {
   EXPECT_NEAR(odometry[1].header.stamp.seconds(), kT0 + 1, 1e-6);
   EXPECT_NEAR(odometry[2].header.stamp.seconds(), kT0 + 2, 1e-6);
   EXPECT_NEAR(odometry[3].header.stamp.seconds(), kT0 + 2.5, 1e-6);  // No frame after it.
+}
+
+// MRPT 2 stores the full class name (mrpt::obs::CSensoryFrame): the top-level container check
+// knows it too. A sensory frame of one scan, its count then set to 2^32 - 1.
+TEST(MrptRawlogSynthetic, ContainerCountCheckedUnderMrpt2sFullClassName) {
+  const std::string path = temp_path("full_name.rawlog");
+  {
+    mrpt::io::CFileOutputStream out(path);
+    auto archive = mrpt::serialization::archiveFrom(out);
+    mrpt::obs::CSensoryFrame frame;
+    frame.insert(laser("", kT0, true, 0.0));
+    archive << frame;
+  }
+  std::string bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const std::string header = "\x98mrpt::obs::CSensoryFrame\x02";
+  ASSERT_EQ(bytes.substr(0, header.size()), header);
+  ASSERT_NO_THROW(MrptRawlogReader{path});
+  bytes.replace(header.size(), 4, "\xff\xff\xff\xff");
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << bytes;
+  }
+  try {
+    MrptRawlogReader reader(path);
+    FAIL() << "read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              path +
+                  ": not a readable MRPT rawlog (a CSensoryFrame of 4294967295 observations in "
+                  "the " +
+                  std::to_string(bytes.size() - header.size() - 4) + " bytes left)");
+  }
 }
 
 }  // namespace

@@ -216,5 +216,88 @@ TEST_F(MrptRawlogSena, CorruptCompressedCopyIsRefused) {
   expect_unreadable(write_text("corrupt.rawlog", bytes), "corrupt");
 }
 
+// A container's count is checked against the bytes left before MRPT reads it: MRPT sizes the
+// container first (a CSensoryFrame of 0x746e0001 observations: a deque of 31 GiB, made page by
+// page, from the fuzzer). The first sensory frame's count, then the first action collection's
+// (after 2049 bytes), set past the end of the log.
+TEST_F(MrptRawlogSena, ContainerCountsBeyondTheLogAreRefusedBeforeMrptReadsThem) {
+  const std::string bytes = uncompressed(kSena);
+  // Each object's header: 0x80 | the name's length, the name, the version; then the count.
+  ASSERT_EQ(bytes.substr(0, 19), std::string("\x8D"
+                                             "CSensoryFrame\x02\x01\x00\x00\x00",
+                                             19));
+  ASSERT_EQ(bytes.substr(2049, 23), std::string("\x91"
+                                                "CActionCollection\x00\x01\x00\x00\x00",
+                                                23));
+  std::string frame = bytes;
+  frame.replace(15, 4, std::string("\x01\x00\x6e\x74", 4));
+  EXPECT_EQ(open_error(write_text("frame_count.rawlog", frame)),
+            temp_path("frame_count.rawlog") +
+                ": not a readable MRPT rawlog (a CSensoryFrame of 1953366017 observations in the " +
+                std::to_string(bytes.size() - 19) + " bytes left)");
+  std::string actions = bytes;
+  actions.replace(2049 + 19, 4, "\xff\xff\xff\xff");
+  EXPECT_EQ(open_error(write_text("action_count.rawlog", actions)),
+            temp_path("action_count.rawlog") +
+                ": not a readable MRPT rawlog (corrupt after 1 objects: a CActionCollection of "
+                "4294967295 actions in the " +
+                std::to_string(bytes.size() - 2049 - 23) + " bytes left)");
+  // A count the log can hold is MRPT's to read (here the frame's one observation).
+  EXPECT_EQ(open_error(write_text("fine.rawlog", bytes)), "");
+}
+
+// MRPT makes a matrix's storage before it reads its values and writes through the null pointer
+// it gets when the allocation fails (SIGSEGV). The first CMatrixD of the log (the scan's mount
+// pose, 4 x 4 doubles after the header at byte 62) stated as 262144 x 1291845636.
+TEST_F(MrptRawlogSena, MatricesLargerThanTheLogAreRefusedBeforeMrptReadsThem) {
+  const std::string bytes = uncompressed(kSena);
+  ASSERT_EQ(bytes.substr(62, 18), std::string("\x88"
+                                              "CMatrixD\x00\x04\x00\x00\x00\x04\x00\x00\x00",
+                                              18));
+  std::string matrix = bytes;
+  matrix.replace(72, 8, std::string("\x00\x00\x04\x00\x04\x00\x00\x4d", 8));
+  EXPECT_EQ(open_error(write_text("matrix.rawlog", matrix)),
+            temp_path("matrix.rawlog") +
+                ": not a readable MRPT rawlog (a CMatrixD of 262144 x 1291845636 values at byte "
+                "62, more than the " +
+                std::to_string(bytes.size() - 80) + " bytes after it)");
+  // 4 x 5 doubles: more than the bytes after it only at the log's end, so MRPT reads it (and
+  // finds the log corrupt).
+  matrix.replace(72, 8, std::string("\x04\x00\x00\x00\x05\x00\x00\x00", 8));
+  const std::string error = open_error(write_text("matrix_4x5.rawlog", matrix));
+  EXPECT_NE(error, "");
+  EXPECT_EQ(error.find("CMatrixD of"), std::string::npos) << error;
+}
+
+// The first action (a CActionRobotMovement2D of version 6 at byte 2072: the estimation method at
+// 2096, the raw increment, a CPose2D, at 2100, the motion model at 2134, its particles at 2162).
+// Another method than odometry makes MRPT read the CPose2D as the pose change, a CPosePDF: it
+// gets null and copies through it (SIGSEGV). Thrun's model with 2^32 - 1 particles makes MRPT
+// draw them all.
+TEST_F(MrptRawlogSena, MovementsMrptCannotReadAreRefusedBeforeMrptReadsThem) {
+  const std::string bytes = uncompressed(kSena);
+  ASSERT_EQ(bytes.substr(2072, 24),
+            "\x96"
+            "CActionRobotMovement2D\x06");
+  ASSERT_EQ(bytes.substr(2100, 9),
+            "\x87"
+            "CPose2D\x01");
+  ASSERT_EQ(bytes.substr(2162, 4), std::string("\x2c\x01\x00\x00", 4));  // 300 particles.
+  std::string method = bytes;
+  method[2096] = '\x01';  // Scan matching.
+  EXPECT_EQ(open_error(write_text("method.rawlog", method)),
+            temp_path("method.rawlog") +
+                ": not a readable MRPT rawlog (a CActionRobotMovement2D at byte 2072 of estimation "
+                "method 1 whose pose change is 'CPose2D', not a CPosePDF)");
+  std::string thrun = bytes;
+  thrun[2134] = '\x01';  // Thrun's model, with its 300 particles: read.
+  EXPECT_EQ(open_error(write_text("thrun_300.rawlog", thrun)), "");
+  thrun.replace(2162, 4, "\xff\xff\xff\xff");
+  EXPECT_EQ(open_error(write_text("thrun.rawlog", thrun)),
+            temp_path("thrun.rawlog") +
+                ": not a readable MRPT rawlog (a CActionRobotMovement2D at byte 2072 asking for "
+                "4294967295 particles of Thrun's motion model (more than 100000))");
+}
+
 }  // namespace
 }  // namespace dispel::io

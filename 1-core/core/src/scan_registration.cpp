@@ -14,6 +14,9 @@ namespace {
 
 constexpr auto reject = reject_field;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// A margin for the rounding of distances of a few metres in bounds that must hold exactly.
+constexpr double kDistanceMargin_m = 1e-9;
 // A pose change that scales with time: motion per second times dt (first order).
 Pose2 scaled(const Pose2& per_s, double dt) {
   return {per_s.x_m * dt, per_s.y_m * dt, per_s.yaw_rad * dt};
@@ -326,6 +329,7 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
         gather_candidates(seed, reach, threshold + config_.max_correction_m, false);
       }
 
+      nearby_.assign(sample_.size(), Nearby{});
       const double kappa = threshold / 3.0;
       const double threshold2 = threshold * threshold;
       Eigen::Matrix3d h_data = Eigen::Matrix3d::Zero();
@@ -340,16 +344,44 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
         const PoseTransform to_fixed(pose);
         for (std::size_t i = 0; i < sample_.size(); ++i) {
           const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
-          double best = threshold2;
+          // The nearest candidate (the first of equals), used when within the threshold: among
+          // the point's nearby candidates when that holds it, among all of them otherwise
+          // (which finds the nearby ones again, around where the point is now).
+          Nearby& nearby = nearby_[i];
+          double best = kInfinity;
           std::int32_t found = -1;
-          for (std::int32_t j = candidate_begin_[i]; j < candidate_begin_[i + 1]; ++j) {
-            const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
-            if (d2 < best) {
-              best = d2;
-              found = j;
+          if (nearby.count >= 0 && nearby.nearest_m + (q - nearby.at).norm() +
+                                           (q - nearby.origin).norm() + kDistanceMargin_m <=
+                                       kNearby_m) {
+            for (std::int32_t k = 0; k < nearby.count; ++k) {
+              const std::int32_t j = nearby.index[static_cast<std::size_t>(k)];
+              const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
+              if (d2 < best) {
+                best = d2;
+                found = j;
+              }
+            }
+          } else {
+            nearby.origin = q;
+            nearby.count = 0;
+            for (std::int32_t j = candidate_begin_[i]; j < candidate_begin_[i + 1]; ++j) {
+              const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
+              if (d2 < best) {
+                best = d2;
+                found = j;
+              }
+              if (d2 <= kNearby_m * kNearby_m && nearby.count >= 0) {
+                if (nearby.count == static_cast<std::int32_t>(nearby.index.size())) {
+                  nearby.count = -1;
+                } else {
+                  nearby.index[static_cast<std::size_t>(nearby.count++)] = j;
+                }
+              }
             }
           }
-          if (found < 0) continue;
+          nearby.at = q;
+          nearby.nearest_m = std::sqrt(best);
+          if (!(best < threshold2)) continue;
           ++inliers;
           const Eigen::Vector2d diff = q - candidate_points_[static_cast<std::size_t>(found)];
           Eigen::Vector2d normal = candidate_normals_[static_cast<std::size_t>(found)];

@@ -174,6 +174,19 @@ class ScanRegistration {
   std::vector<const Voxel*> neighbourhood_;  // Scratch: the voxels around a sample point.
   std::vector<Eigen::Vector2d> candidate_points_;
   std::vector<Eigen::Vector2d> candidate_normals_;
+  // Each sample point's candidates within kNearby_m of where it was when all its candidates were
+  // last looked at (in their order; count -1: more than fit), and its nearest candidate's
+  // distance at the last iteration. While that distance plus how far the point moved since
+  // stays within kNearby_m, its nearest is one of these (the others are farther).
+  static constexpr double kNearby_m = 0.2;
+  struct Nearby {
+    Eigen::Vector2d origin;
+    Eigen::Vector2d at;
+    double nearest_m = 0.0;
+    std::int32_t count = -1;
+    std::array<std::int32_t, 31> index{};
+  };
+  std::vector<Nearby> nearby_;
   // explained(): the voxels that can explain points of one voxel, kept for the next beam.
   mutable std::vector<const Voxel*> explaining_;
   mutable bool explaining_valid_ = false;

@@ -126,14 +126,14 @@ bool ScanRegistration::explained(std::size_t b) const {
     explaining_.clear();
     for (std::int64_t x = ix - 1; x <= ix + 1; ++x) {
       for (std::int64_t y = iy - 1; y <= iy + 1; ++y) {
-        const auto it = map_.find(key_at(x, y));
+        const Voxel* v = map_.find(key_at(x, y));
         // Structure explains only while it is still seen: someone who stood there and left
         // explains no one who comes by later.
-        if (it == map_.end() || !structure(it->second) ||
-            last_stamp_s_ - it->second.last_stamp_s > config_.explained_max_age_s) {
+        if (v == nullptr || !structure(*v) ||
+            last_stamp_s_ - v->last_stamp_s > config_.explained_max_age_s) {
           continue;
         }
-        explaining_.push_back(&it->second);
+        explaining_.push_back(v);
       }
     }
     explaining_valid_ = true;
@@ -258,9 +258,9 @@ std::int32_t ScanRegistration::gather_candidates(const Pose2& pose, int reach, d
       neighbourhood_.clear();
       for (std::int64_t x = ix - reach; x <= ix + reach; ++x) {
         for (std::int64_t y = iy - reach; y <= iy + reach; ++y) {
-          const auto it = map_.find(key_at(x, y));
-          if (it == map_.end() || (structure_only && !structure(it->second))) continue;
-          neighbourhood_.push_back(&it->second);
+          const Voxel* v = map_.find(key_at(x, y));
+          if (v == nullptr || (structure_only && !structure(*v))) continue;
+          neighbourhood_.push_back(v);
         }
       }
       have_last = true;
@@ -495,8 +495,8 @@ void ScanRegistration::add(const std::vector<char>& keep,
   explaining_valid_ = false;
   const double max_r2 = config_.max_range_m * config_.max_range_m;
   const PoseTransform to_fixed(last_pose_);
-  // Consecutive beams mostly fall in the same voxel: it is looked up once for them (a reference
-  // into the map stays valid while others are inserted).
+  // Consecutive beams mostly fall in the same voxel: it is looked up once for them (the pointer
+  // is used only until the next lookup, which may insert and move the voxels).
   Voxel* voxel = nullptr;
   Key last_key = 0;
   for (std::size_t b = 0; b < world_points_.size() && b < keep.size(); ++b) {
@@ -527,13 +527,12 @@ void ScanRegistration::add(const std::vector<char>& keep,
   if (scan_count_ % 10 != 0) return;
   const double radius2 = config_.local_map_radius_m * config_.local_map_radius_m;
   const Eigen::Vector2d center = last_pose_.translation();
-  for (auto it = map_.begin(); it != map_.end();) {
-    const Voxel& v = it->second;
+  map_.erase_if([&](Key /*key*/, const Voxel& v) {
     const bool far = (v.points[0].cast<double>() - center).squaredNorm() > radius2;
     const bool transient = v.scans < config_.explained_min_scans &&
                            last_stamp_s_ - v.last_stamp_s > kTransientMemory_s;
-    it = far || transient ? map_.erase(it) : std::next(it);
-  }
+    return far || transient;
+  });
 }
 
 }  // namespace dispel

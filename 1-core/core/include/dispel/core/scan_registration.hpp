@@ -11,9 +11,9 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
-#include <unordered_map>
 #include <vector>
 
+#include "dispel/core/integer_key_map.hpp"
 #include "dispel/core/laser_scan.hpp"
 #include "dispel/core/pose2.hpp"
 
@@ -131,10 +131,12 @@ class ScanRegistration {
   const RegistrationConfig& config() const { return config_; }
 
  private:
+  static inline const Eigen::Vector2f kZero = Eigen::Vector2f::Zero();
   struct Voxel {
-    std::array<Eigen::Vector2f, 4> points;
-    std::array<Eigen::Vector2f, 4> normals;
-    std::array<double, 4> stamps_s;  // When each point was added.
+    // Zeroed (Eigen leaves its own uninitialised): voxels are copied when the map grows.
+    std::array<Eigen::Vector2f, 4> points{kZero, kZero, kZero, kZero};
+    std::array<Eigen::Vector2f, 4> normals{kZero, kZero, kZero, kZero};
+    std::array<double, 4> stamps_s{};  // When each point was added.
     std::uint8_t count = 0;
     std::int32_t scans = 0;       // Scans that hit it.
     bool in_free_space = false;   // First hit where the scanner had seen through.
@@ -151,7 +153,7 @@ class ScanRegistration {
   Eigen::Vector2d normal_at(std::size_t b) const;
 
   RegistrationConfig config_;
-  std::unordered_map<Key, Voxel> map_;
+  IntegerKeyMap<Voxel> map_;
   std::uint32_t scan_count_ = 0;
   bool have_previous_ = false;
   double previous_stamp_s_ = 0.0;

@@ -9,17 +9,11 @@
 #include <optional>
 
 #include "cli_common.hpp"
+#include "dispel/core/percentile.hpp"
 #include "dispel/io/atomic_file.hpp"
 
 namespace dispel::apps {
 namespace {
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5);
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
 
 nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::FilterJobStats& s) {
   nlohmann::ordered_json j;

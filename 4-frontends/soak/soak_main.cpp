@@ -24,6 +24,8 @@
 #include <vector>
 
 #include "dispel/core/dynamic_filter.hpp"
+#include "dispel/core/percentile.hpp"
+#include "dispel/core/pose_buffer.hpp"
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/scenario_yaml.hpp"
 #include "dispel/io/text.hpp"
@@ -63,15 +65,6 @@ double peak_rss_mib() {
   return static_cast<double>(u.ru_maxrss) / 1024.0;
 }
 
-// The q-quantile (0..1) of @p v by rank (nearest rank); reorders v. 0 for none.
-double quantile(std::vector<float>& v, double q) {
-  if (v.empty()) return 0.0;
-  const auto rank = static_cast<std::size_t>(std::min<double>(
-      static_cast<double>(v.size()) - 1.0, std::ceil(q * static_cast<double>(v.size())) - 1.0));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(rank), v.end());
-  return v[rank];
-}
-
 // One period's figures, reset after its row is printed (vectors keep their capacity).
 struct Period {
   std::int64_t scans = 0;
@@ -98,18 +91,6 @@ struct Row {
   double p99_us = 0.0;
   double cpu_p99_us = 0.0;
 };
-
-// The laser's pose in the odometry frame at @p t, between two odometry samples.
-dispel::Pose2 interpolate(const dispel::sim::SensorSample& a, const dispel::sim::SensorSample& b,
-                          double t) {
-  const double span = b.stamp_s - a.stamp_s;
-  const double f = span > 0.0 ? std::clamp((t - a.stamp_s) / span, 0.0, 1.0) : 1.0;
-  const Eigen::Vector2d p =
-      a.odom_pose.translation() + f * (b.odom_pose.translation() - a.odom_pose.translation());
-  const double yaw =
-      a.odom_pose.yaw_rad + f * dispel::wrap_angle(b.odom_pose.yaw_rad - a.odom_pose.yaw_rad);
-  return dispel::Pose2{p.x(), p.y(), yaw};
-}
 
 int run(const Options& o) {
   const dispel::sim::Scenario scenario = dispel::io::load_scenario(o.scenario);
@@ -158,16 +139,16 @@ int run(const Options& o) {
     Row row;
     row.hours = std::min(duration_s, static_cast<double>(index + 1) * o.report_every_s) / 3600.0;
     row.rss = rss_mib();
-    const double filt_med = quantile(period.filter_us, 0.5);
-    row.p99_us = quantile(period.filter_us, 0.99);
-    const double filt_p999 = quantile(period.filter_us, 0.999);
+    const double filt_med = dispel::percentile(period.filter_us, 0.5);
+    row.p99_us = dispel::percentile(period.filter_us, 0.99);
+    const double filt_p999 = dispel::percentile(period.filter_us, 0.999);
     const double filt_max = period.filter_us.empty() ? 0.0
                                                      : *std::max_element(period.filter_us.begin(),
                                                                          period.filter_us.end());
-    const double cpu_med = quantile(period.cpu_us, 0.5);
-    row.cpu_p99_us = quantile(period.cpu_us, 0.99);
-    const double odom_med = quantile(period.odom_us, 0.5);
-    const double odom_p99 = quantile(period.odom_us, 0.99);
+    const double cpu_med = dispel::percentile(period.cpu_us, 0.5);
+    row.cpu_p99_us = dispel::percentile(period.cpu_us, 0.99);
+    const double odom_med = dispel::percentile(period.odom_us, 0.5);
+    const double odom_p99 = dispel::percentile(period.odom_us, 0.99);
     const double removed =
         period.beams > 0 ? static_cast<double>(period.removed) / static_cast<double>(period.beams)
                          : 0.0;
@@ -193,7 +174,8 @@ int run(const Options& o) {
 
   // A scan waits for the odometry sample at or after its stamp (at most one sample period).
   std::deque<dispel::sim::ScanFrame> waiting;
-  std::optional<dispel::sim::SensorSample> previous;
+  // The odometry's poses, interpolated at the scans' stamps and forgotten once behind them.
+  dispel::PoseBuffer odometry_poses;
   const auto filter_scan = [&](const dispel::sim::ScanFrame& frame,
                                const std::optional<dispel::Pose2>& sensor_pose) {
     enter(frame.scan.stamp_s - scenario.start_time_s);
@@ -215,15 +197,19 @@ int run(const Options& o) {
   dispel::sim::SimulationSink sink;
   sink.scan = [&](dispel::sim::ScanFrame&& frame) { waiting.push_back(std::move(frame)); };
   sink.sensor = [&](const dispel::sim::SensorSample& s) {
+    odometry_poses.add(s.stamp_s, s.odom_pose);
     // The scans up to this sample first (they may belong to the period before it).
     while (!waiting.empty() && waiting.front().scan.stamp_s <= s.stamp_s) {
       const dispel::sim::ScanFrame& frame = waiting.front();
-      const dispel::sim::SensorSample& before =
-          previous && previous->stamp_s <= frame.scan.stamp_s ? *previous : s;
-      filter_scan(frame, interpolate(before, s, frame.scan.stamp_s) * mount);
+      dispel::Pose2 odometry_pose;
+      if (odometry_poses.lookup(frame.scan.stamp_s, odometry_pose) == dispel::PoseLookup::kOk) {
+        filter_scan(frame, odometry_pose * mount);
+      } else {
+        filter_scan(frame, std::nullopt);
+      }
+      odometry_poses.forget_before(frame.scan.stamp_s);
       waiting.pop_front();
     }
-    previous = s;
     enter(s.stamp_s - scenario.start_time_s);
     const Clock::time_point t0 = Clock::now();
     fusion.add_wheels(s.stamp_s, s.wheel_left_mps, s.wheel_right_mps);

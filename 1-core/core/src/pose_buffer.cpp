@@ -51,6 +51,12 @@ PoseLookup PoseBuffer::lookup(double stamp_s, Pose2& pose) const {
   return PoseLookup::kOk;
 }
 
+void PoseBuffer::forget_before(double stamp_s) {
+  const auto after = std::upper_bound(poses_.begin(), poses_.end(), stamp_s,
+                                      [](double t, const TimedPose& p) { return t < p.stamp_s; });
+  if (after - poses_.begin() > 1) poses_.erase(poses_.begin(), after - 1);
+}
+
 const char* pose_lookup_name(PoseLookup result) {
   switch (result) {
     case PoseLookup::kOk:

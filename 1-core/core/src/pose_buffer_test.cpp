@@ -55,5 +55,31 @@ TEST(PoseBuffer, RefusesNonFiniteAndRepeatedStampsAndDoesNotBridgeGaps) {
   EXPECT_STREQ(pose_lookup_name(PoseLookup::kGap), "pose_gap");
 }
 
+// Forgetting what lies before a stamp changes no lookup at that stamp or later, and keeps the
+// buffer short when it is fed for a long time.
+TEST(PoseBuffer, ForgettingTheOldPosesChangesNoLaterLookup) {
+  PoseBuffer full(0.05, 0.5), pruned(0.05, 0.5);
+  for (int k = 0; k < 1000; ++k) {
+    const double t = 0.01 * k + (k > 500 ? 0.7 : 0.0);  // One gap after k = 500.
+    const Pose2 pose{std::cos(t), std::sin(2.0 * t), wrap_angle(3.0 * t)};
+    ASSERT_TRUE(full.add(t, pose));
+    ASSERT_TRUE(pruned.add(t, pose));
+    const double asked = t - 0.013;  // A scan a little older than the newest pose.
+    pruned.forget_before(asked);
+    EXPECT_LE(pruned.size(), 3u) << k;
+    for (const double u : {asked, asked + 0.004, t, t + 0.02}) {
+      Pose2 a, b;
+      const PoseLookup ra = full.lookup(u, a), rb = pruned.lookup(u, b);
+      ASSERT_EQ(ra, rb) << k << " " << u;
+      if (ra != PoseLookup::kOk) continue;
+      EXPECT_EQ(a.x_m, b.x_m);
+      EXPECT_EQ(a.y_m, b.y_m);
+      EXPECT_EQ(a.yaw_rad, b.yaw_rad);
+    }
+  }
+  pruned.forget_before(1e9);
+  EXPECT_EQ(pruned.size(), 1u);  // The last pose stays: a lookup within the tolerance needs it.
+}
+
 }  // namespace
 }  // namespace dispel

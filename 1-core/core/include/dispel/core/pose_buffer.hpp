@@ -43,6 +43,10 @@ class PoseBuffer {
   /// The pose at @p stamp_s, or why there is none.
   PoseLookup lookup(double stamp_s, Pose2& pose) const;
 
+  /// Forgets the poses no lookup at @p stamp_s or later needs: those before the last one at or
+  /// before it (a buffer fed for hours stays a few poses long).
+  void forget_before(double stamp_s);
+
   std::size_t size() const { return poses_.size(); }
   bool empty() const { return poses_.empty(); }
   const std::vector<TimedPose>& poses() const { return poses_; }

@@ -329,7 +329,7 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
         gather_candidates(seed, reach, threshold + config_.max_correction_m, false);
       }
 
-      nearby_.assign(sample_.size(), Nearby{});
+      nearby_.resize(sample_.size());  // Each filled at the first iteration.
       const double kappa = threshold / 3.0;
       const double threshold2 = threshold * threshold;
       Eigen::Matrix3d h_data = Eigen::Matrix3d::Zero();
@@ -344,17 +344,16 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
         const PoseTransform to_fixed(pose);
         for (std::size_t i = 0; i < sample_.size(); ++i) {
           const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
-          // The nearest candidate (the first of equals), used when within the threshold: among
-          // the point's nearby candidates when that holds it, among all of them otherwise
-          // (which finds the nearby ones again, around where the point is now).
+          // The nearest candidate (the first of equals), used when within the threshold: from
+          // the second iteration on, among the point's nearby candidates when they hold it;
+          // among all of them otherwise (finding, from the first iteration on, the nearby ones
+          // around where the point is now). A scan that converges at once pays nothing for it.
           Nearby& nearby = nearby_[i];
           double best = kInfinity;
           std::int32_t found = -1;
-          if (nearby.count >= 0 && nearby.nearest_m + (q - nearby.at).norm() +
-                                           (q - nearby.origin).norm() + kDistanceMargin_m <=
-                                       kNearby_m) {
-            for (std::int32_t k = 0; k < nearby.count; ++k) {
-              const std::int32_t j = nearby.index[static_cast<std::size_t>(k)];
+          const std::int32_t begin = candidate_begin_[i], end = candidate_begin_[i + 1];
+          if (iteration == 0) {
+            for (std::int32_t j = begin; j < end; ++j) {
               const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
               if (d2 < best) {
                 best = d2;
@@ -362,25 +361,39 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
               }
             }
           } else {
-            nearby.origin = q;
-            nearby.count = 0;
-            for (std::int32_t j = candidate_begin_[i]; j < candidate_begin_[i + 1]; ++j) {
-              const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
-              if (d2 < best) {
-                best = d2;
-                found = j;
-              }
-              if (d2 <= kNearby_m * kNearby_m && nearby.count >= 0) {
-                if (nearby.count == static_cast<std::int32_t>(nearby.index.size())) {
-                  nearby.count = -1;
-                } else {
-                  nearby.index[static_cast<std::size_t>(nearby.count++)] = j;
+            if (iteration > 1 && nearby.count >= 0 &&
+                nearby.nearest_m + (q - nearby.at).norm() + (q - nearby.origin).norm() +
+                        kDistanceMargin_m <=
+                    kNearby_m) {
+              for (std::int32_t k = 0; k < nearby.count; ++k) {
+                const std::int32_t j = nearby.index[static_cast<std::size_t>(k)];
+                const double d2 =
+                    (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
+                if (d2 < best) {
+                  best = d2;
+                  found = j;
                 }
               }
+            } else {
+              nearby.origin = q;
+              nearby.count = 0;
+              for (std::int32_t j = begin; j < end; ++j) {
+                const double d2 =
+                    (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
+                if (d2 < best) {
+                  best = d2;
+                  found = j;
+                }
+                // Without a branch: written at the count (the last slot takes the overflow),
+                // counted when near.
+                nearby.index[static_cast<std::size_t>(std::min(nearby.count, kNearbyMax))] = j;
+                nearby.count += d2 <= kNearby_m * kNearby_m ? 1 : 0;
+              }
+              if (nearby.count > kNearbyMax) nearby.count = -1;
             }
+            nearby.at = q;
+            nearby.nearest_m = std::sqrt(best);
           }
-          nearby.at = q;
-          nearby.nearest_m = std::sqrt(best);
           if (!(best < threshold2)) continue;
           ++inliers;
           const Eigen::Vector2d diff = q - candidate_points_[static_cast<std::size_t>(found)];

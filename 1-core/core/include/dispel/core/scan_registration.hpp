@@ -181,12 +181,13 @@ class ScanRegistration {
   // distance at the last iteration. While that distance plus how far the point moved since
   // stays within kNearby_m, its nearest is one of these (the others are farther).
   static constexpr double kNearby_m = 0.2;
+  static constexpr std::int32_t kNearbyMax = 31;
   struct Nearby {
     Eigen::Vector2d origin;
     Eigen::Vector2d at;
     double nearest_m = 0.0;
     std::int32_t count = -1;
-    std::array<std::int32_t, 31> index{};
+    std::array<std::int32_t, kNearbyMax + 1> index{};
   };
   std::vector<Nearby> nearby_;
   // explained(): the voxels that can explain points of one voxel, kept for the next beam.

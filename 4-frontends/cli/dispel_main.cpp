@@ -52,7 +52,8 @@ int main(int argc, char** argv) {
   std::string config_path;
   CLI::App* filter_cmd = app.add_subcommand(
       "filter",
-      "Remove moving objects from the scans of a recording (ROS 1 bag, MRPT rawlog or CARMEN log)");
+      "Remove moving objects from the scans of a recording (ROS 1 bag, rosbag2 MCAP, MRPT rawlog "
+      "or CARMEN log)");
   filter_cmd
       ->add_option("input", filter.job.input, "IN.bag, an MRPT IN.rawlog, or a CARMEN .log/.clf")
       ->required();
@@ -69,8 +70,26 @@ int main(int argc, char** argv) {
   filter_cmd->add_flag("--scale-to-scanner", filter.job.scale_to_scanner,
                        "Carry N_min, L_d and L_s over from the thesis's scanner to this one");
   filter_cmd->add_option("--stats", filter.stats_path, "Write statistics as JSON here");
-  filter_cmd->add_option("--compression", filter.compression, "Output bag compression")
-      ->check(CLI::IsMember({"none", "bz2", "lz4"}))
+  filter_cmd
+      ->add_option("--compression", filter.compression,
+                   "Output compression: bz2 or lz4 for a ROS 1 bag, zstd or lz4 for MCAP")
+      ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))
+      ->capture_default_str();
+
+  dispel::jobs::ConvertJobOptions convert;
+  std::string convert_compression = "none";
+  CLI::App* convert_cmd = app.add_subcommand(
+      "convert",
+      "Write a recording in another format: ROS 1 bag (.bag) or rosbag2 MCAP (.mcap, or "
+      "a bag folder)");
+  convert_cmd->add_option("input", convert.input, "IN: .bag, .mcap, a rosbag2 folder, .rawlog")
+      ->required();
+  convert_cmd->add_option("-o,--output", convert.output, "OUT.bag, OUT.mcap or a new folder OUT")
+      ->required();
+  convert_cmd
+      ->add_option("--compression", convert_compression,
+                   "bz2 or lz4 for a ROS 1 bag, zstd or lz4 for MCAP")
+      ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))
       ->capture_default_str();
 
   dispel::apps::SimOptions sim;
@@ -215,6 +234,10 @@ int main(int argc, char** argv) {
       return dispel::apps::run_filter(filter);
     }
     if (*sim_cmd) return dispel::apps::run_sim(sim);
+    if (*convert_cmd) {
+      convert.compression = dispel::apps::compression_named(convert_compression);
+      return dispel::apps::run_convert(convert);
+    }
     if (*eval_cmd) return dispel::apps::run_eval(evaluation);
     if (*odom_cmd) {
       if (!odom_config.empty()) odom.job.config_path = odom_config;

@@ -22,6 +22,7 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
   j["format"] = s.input_format;
   j["messages_in"] = s.messages_in;
   j["messages_out"] = s.messages_out;
+  j["messages_left_out"] = s.left_out;
   nlohmann::ordered_json skipped = nlohmann::ordered_json::object();
   std::int64_t skipped_total = 0;
   for (const auto& [reason, n] : s.scans_skipped) {
@@ -126,11 +127,7 @@ class ProgressBar {
 }  // namespace
 
 int run_filter(FilterCommandOptions options) {
-  if (options.compression == "bz2") {
-    options.job.compression = jobs::Compression::kBz2;
-  } else if (options.compression == "lz4") {
-    options.job.compression = jobs::Compression::kLz4;
-  }
+  options.job.compression = compression_named(options.compression);
   std::optional<Interrupts> interrupts(std::in_place);
   ProgressBar bar;
   jobs::Progress progress;
@@ -172,6 +169,9 @@ int run_filter(FilterCommandOptions options) {
   }
   std::fflush(stdout);
   if (!stats.warning.empty()) std::cerr << "dispel filter: warning: " << stats.warning << "\n";
+  if (!stats.left_out.empty()) {
+    std::cerr << "dispel filter: warning: " << jobs::left_out_summary(stats.left_out) << "\n";
+  }
 
   if (!options.stats_path.empty()) {
     try {
@@ -181,6 +181,42 @@ int run_filter(FilterCommandOptions options) {
                 << options.job.output << " was written)\n";
       return 1;
     }
+  }
+  return 0;
+}
+
+jobs::Compression compression_named(const std::string& name) {
+  if (name == "bz2") return jobs::Compression::kBz2;
+  if (name == "lz4") return jobs::Compression::kLz4;
+  if (name == "zstd") return jobs::Compression::kZstd;
+  return jobs::Compression::kNone;
+}
+
+int run_convert(const jobs::ConvertJobOptions& options) {
+  std::optional<Interrupts> interrupts(std::in_place);
+  ProgressBar bar;
+  jobs::Progress progress;
+  if (::isatty(STDERR_FILENO) != 0) progress = [&bar](double f) { bar(f); };
+  jobs::ConvertJobStats stats;
+  try {
+    stats = jobs::run_convert_job(options, progress, interrupts->flag());
+  } catch (const jobs::JobCancelled&) {
+    bar.finish();
+    std::cerr << "dispel convert: interrupted; " << error_line(options.output)
+              << " was not written\n";
+    return 130;
+  } catch (const std::exception& e) {
+    bar.finish();
+    std::cerr << "dispel convert: " << error_line(e.what()) << "\n";
+    return 1;
+  }
+  bar.finish();
+  std::printf("dispel convert: %lld messages of a %s recording\nwrote %s: %lld messages\n",
+              static_cast<long long>(stats.messages_in), stats.input_format.c_str(),
+              options.output.c_str(), static_cast<long long>(stats.messages_out));
+  std::fflush(stdout);
+  if (!stats.left_out.empty()) {
+    std::cerr << "dispel convert: warning: " << jobs::left_out_summary(stats.left_out) << "\n";
   }
   return 0;
 }

@@ -1,8 +1,10 @@
 #pragma once
-// `dispel filter`: a thin shell around dispel::jobs::run_filter_job.
+// `dispel filter` and `dispel convert`: thin shells around dispel::jobs::run_filter_job and
+// run_convert_job.
 
 #include <string>
 
+#include "dispel/jobs/convert_job.hpp"
 #include "dispel/jobs/filter_job.hpp"
 
 namespace dispel::apps {
@@ -16,5 +18,12 @@ struct FilterCommandOptions {
 /// Runs the job, prints a progress bar on a terminal and a summary on stdout, writes the
 /// statistics. Returns the exit code: 0 done, 1 error, 130 interrupted.
 int run_filter(FilterCommandOptions options);
+
+/// "none", "bz2", "lz4" or "zstd" as jobs::Compression.
+jobs::Compression compression_named(const std::string& name);
+
+/// Runs the conversion; prints what it wrote, and the messages left out as a warning. Returns the
+/// exit code as run_filter() does.
+int run_convert(const jobs::ConvertJobOptions& options);
 
 }  // namespace dispel::apps

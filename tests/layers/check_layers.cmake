@@ -16,6 +16,8 @@ set(rooms
   "2-formats/io|core sim eval pipeline io|ros/ rosbag/ sensor_msgs/ nav_msgs/ tf2_msgs/ cairo mrpt/"
   "2-formats/ros1_messages|core sim eval pipeline io|rosbag/ cairo mrpt/"
   "2-formats/ros1_bags|core sim eval pipeline io|cairo mrpt/"
+  "2-formats/ros2_messages|core sim eval pipeline io|ros/ rosbag/ sensor_msgs/ nav_msgs/ tf2_msgs/ cairo mrpt/ zstd lz4 yaml-cpp/ cstdio fstream iostream"
+  "2-formats/rosbag2|core sim eval pipeline io|ros/ rosbag/ sensor_msgs/ nav_msgs/ tf2_msgs/ cairo mrpt/"
   "2-formats/mrpt_rawlog|core sim eval pipeline io|ros/ rosbag/ sensor_msgs/ nav_msgs/ tf2_msgs/ cairo"
   "3-jobs/jobs|core sim eval pipeline io jobs|ros/ rosbag/ sensor_msgs/ nav_msgs/ tf2_msgs/ cairo mrpt/"
   "3-jobs/render|core sim eval pipeline io jobs render|ros/ rosbag/ sensor_msgs/ mrpt/"
@@ -26,7 +28,8 @@ set(rooms
   "4-frontends/soak|core sim pipeline io|ros/ rosbag/ cairo mrpt/")
 # Headers of a room that a room above may not use even though its layer is below (the ROS 1 bag
 # library is for the jobs' recordings, not for a live node).
-set(ros1_forbidden_headers "dispel/io/ros1_bag.hpp" "dispel/io/mrpt_rawlog.hpp")
+set(ros1_forbidden_headers "dispel/io/ros1_bag.hpp" "dispel/io/mrpt_rawlog.hpp"
+                           "dispel/io/rosbag2.hpp")
 
 set(layer_of_room_core 1)
 set(layer_of_room_sim 1)

@@ -83,6 +83,10 @@ std::string join_names(const std::vector<std::string>& names) {
   return s.empty() ? std::string("none") : s;
 }
 
+bool is_convertible(MessageKind kind) {
+  return kind != MessageKind::kNavSatFix && kind != MessageKind::kOther;
+}
+
 void write_decoded(RecordingWriter& writer, const RecordedMessage& message) {
   const std::string& topic = message.topic();
   const Stamp time = message.time();

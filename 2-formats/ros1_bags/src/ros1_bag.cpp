@@ -282,6 +282,10 @@ Ros1BagWriter::Ros1BagWriter(const std::string& path, BagCompression compression
 
 Ros1BagWriter::~Ros1BagWriter() = default;
 
+bool Ros1BagWriter::can_copy(const RecordedMessage& message) const {
+  return dynamic_cast<const Ros1Message*>(&message) != nullptr || is_convertible(message.kind());
+}
+
 void Ros1BagWriter::copy(const RecordedMessage& message) {
   const auto* m = dynamic_cast<const Ros1Message*>(&message);
   if (m == nullptr) {  // Another format's message: written from its decoded form.

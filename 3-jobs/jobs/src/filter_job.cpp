@@ -201,7 +201,7 @@ FilterJobStats run_recording(const FilterJobOptions& o, const Progress& progress
   as_job([&] {
     in->read({}, [&](const io::RecordedMessage& m) {
       check_cancelled(cancel);
-      out->copy(m);
+      copy_or_leave_out(*out, m, stats.left_out);
       ++stats.messages_in;
       if (progress && stats.messages_in % 256 == 0) {
         progress(static_cast<double>(stats.messages_in) /

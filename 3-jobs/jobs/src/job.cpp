@@ -10,6 +10,7 @@
 
 #include "dispel/io/errors.hpp"
 #include "dispel/io/ros1_bag.hpp"
+#include "dispel/io/rosbag2.hpp"
 #include "dispel/io/text.hpp"
 #ifdef DISPEL_HAVE_MRPT_RAWLOG
 #include "dispel/io/mrpt_rawlog.hpp"
@@ -128,7 +129,10 @@ void check_files(const std::vector<FileArgument>& inputs,
     std::error_code ec;
     const fs::file_status st = fs::status(f.path, ec);
     if (ec || !fs::exists(st)) continue;  // The reader says "No such file" in its own words.
-    if (!fs::is_regular_file(st)) {
+    // A rosbag2 bag folder is read as a whole; any other input must be a regular file.
+    const bool bag_folder =
+        fs::is_directory(st) && fs::exists(fs::path(f.path) / "metadata.yaml", ec);
+    if (!fs::is_regular_file(st) && !bag_folder) {
       throw JobError(named(f) + ": not a regular file (" + file_type(st) + ")");
     }
     in.emplace_back(&f, place_of(f));
@@ -173,16 +177,67 @@ std::unique_ptr<io::RecordingReader> open_recording(const std::string& path) {
     throw JobError(path + ": this dispel was built without MRPT rawlogs (DISPEL_WITH_MRPT_RAWLOG)");
 #endif
   }
+  if (io::is_rosbag2_path(path)) {
+    return as_job([&] { return std::make_unique<io::Rosbag2Reader>(path); });
+  }
   return as_job([&] { return std::make_unique<io::Ros1BagReader>(path); });
+}
+
+bool writes_rosbag2(const std::string& path) {
+  if (ends_with(path, ".mcap")) return true;
+  if (ends_with(path, ".bag") || path.empty()) return false;
+  if (path.back() == '/') return true;
+  // A name without an extension is a bag folder, as `ros2 bag record -o NAME` makes one.
+  return fs::path(path).extension().empty();
 }
 
 std::unique_ptr<io::RecordingWriter> create_recording(const std::string& path,
                                                       Compression compression) {
   if (path.empty()) throw JobError("no output file given");
+  if (writes_rosbag2(path)) {
+    if (compression == Compression::kBz2) {
+      throw JobError(path +
+                     ": a rosbag2 MCAP recording compresses its chunks with zstd or lz4, "
+                     "not bz2");
+    }
+    const io::Rosbag2Compression c =
+        compression == Compression::kZstd  ? io::Rosbag2Compression::kZstd
+        : compression == Compression::kLz4 ? io::Rosbag2Compression::kLz4
+                                           : io::Rosbag2Compression::kNone;
+    return as_job([&] { return std::make_unique<io::Rosbag2Writer>(path, c); });
+  }
+  if (compression == Compression::kZstd) {
+    throw JobError(path + ": a ROS 1 bag compresses with bz2 or lz4, not zstd");
+  }
   const io::BagCompression c = compression == Compression::kBz2   ? io::BagCompression::kBz2
                                : compression == Compression::kLz4 ? io::BagCompression::kLz4
                                                                   : io::BagCompression::kNone;
   return as_job([&] { return std::make_unique<io::Ros1BagWriter>(path, c); });
+}
+
+void copy_or_leave_out(io::RecordingWriter& out, const io::RecordedMessage& message,
+                       std::map<std::string, std::int64_t>& left_out) {
+  if (out.can_copy(message)) {
+    out.copy(message);
+  } else {
+    ++left_out[message.topic()];
+  }
+}
+
+std::string left_out_summary(const std::map<std::string, std::int64_t>& left_out) {
+  if (left_out.empty()) return "";
+  std::int64_t n = 0;
+  std::vector<std::string> topics;
+  for (const auto& [topic, count] : left_out) {
+    n += count;
+    topics.push_back(io::quote(topic, 60));
+  }
+  if (topics.size() > 8) {
+    topics.resize(8);
+    topics.emplace_back("...");
+  }
+  return std::to_string(n) + " messages left out on " + io::join_names(topics) +
+         " (types that cannot be converted between recording formats)";
 }
 
 }  // namespace dispel::jobs

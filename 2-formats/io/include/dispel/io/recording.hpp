@@ -214,8 +214,12 @@ class RecordingWriter {
  public:
   virtual ~RecordingWriter() = default;
   /// Writes @p message unchanged (its bytes, type and metadata). It must come from a reader of
-  /// the same format. @throws OutputError
+  /// the same format, or be of a kind write_decoded() converts. @throws OutputError
   virtual void copy(const RecordedMessage& message) = 0;
+  /// True when copy() can write @p message: a message of the writer's own format, or one of a
+  /// kind that is_convertible() (a job converting between formats leaves the others out, and
+  /// says so).
+  virtual bool can_copy(const RecordedMessage& message) const = 0;
   /// Writes a message at @p time. @throws OutputError
   virtual void write(const std::string& topic, Stamp time, const ScanMessage& message) = 0;
   virtual void write(const std::string& topic, Stamp time, const OdometryMessage& message) = 0;
@@ -236,6 +240,8 @@ class RecordingWriter {
 /// (kNavSatFix, kOther: their bytes mean nothing outside their own format); InputError when the
 /// message cannot be decoded.
 void write_decoded(RecordingWriter& writer, const RecordedMessage& message);
+/// True for the kinds write_decoded() writes: every kind but kNavSatFix and kOther.
+bool is_convertible(MessageKind kind);
 
 /// A scan message for a scan of the core (the simulator's, a CARMEN log's): the header stamped
 /// with scan.stamp_s in @p frame_id, angle_max from the beam count, no stated period.

@@ -48,6 +48,7 @@ class Ros1BagWriter final : public RecordingWriter {
   /// A message of a Ros1BagReader: its bytes and connection header are copied. A message of
   /// another format is written decoded (write_decoded): OutputError for a kind it cannot decode.
   void copy(const RecordedMessage& message) override;
+  bool can_copy(const RecordedMessage& message) const override;
   void write(const std::string& topic, Stamp time, const ScanMessage& message) override;
   void write(const std::string& topic, Stamp time, const OdometryMessage& message) override;
   void write(const std::string& topic, Stamp time, const TransformsMessage& message) override;

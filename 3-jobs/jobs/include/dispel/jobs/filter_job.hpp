@@ -45,10 +45,13 @@ struct SlowScan {
 };
 
 struct FilterJobStats {
-  bool laser_only = false;          ///< Filtered without odometry (registered scans only).
-  std::string input_format;         ///< "rosbag", "MRPT rawlog" or "carmen".
-  std::int64_t messages_in = 0;     ///< Messages (bag) or lines (CARMEN) read.
-  std::int64_t messages_out = 0;    ///< Messages written.
+  bool laser_only = false;        ///< Filtered without odometry (registered scans only).
+  std::string input_format;       ///< "rosbag", "MRPT rawlog" or "carmen".
+  std::int64_t messages_in = 0;   ///< Messages (bag) or lines (CARMEN) read.
+  std::int64_t messages_out = 0;  ///< Messages written.
+  /// Messages not written, by topic: types that cannot be converted between the input's and the
+  /// output's formats (a ROS 1 bag's /rosout into MCAP, say). See left_out_summary().
+  std::map<std::string, std::int64_t> left_out;
   std::int64_t scans = 0;           ///< Scans seen.
   std::int64_t scans_filtered = 0;  ///< Scans the filter tracked and filtered.
   /// Passed through unchanged, by reason: bad_scan_<issue>, bad_pose, odometry_<lookup> (no pose

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <functional>
+#include <map>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -52,18 +53,31 @@ struct FileArgument {
 void check_files(const std::vector<FileArgument>& inputs, const std::vector<FileArgument>& outputs);
 
 /// Opens a recording by its file's name: an MRPT rawlog for ".rawlog" or ".rawlog.gz" (plain or
-/// gzip-compressed), a ROS 1 bag otherwise. @throws JobError "<path>: not a readable ROS 1 bag
+/// gzip-compressed), a rosbag2 recording for a folder or a ".mcap" file, a ROS 1 bag otherwise.
+/// @throws JobError "<path>: not a readable ROS 1 bag
 /// (...)" or "<path>: not a readable MRPT rawlog (...)" (a missing file too: callers that want "No
 /// such file" say so first, check_input_file)
 std::unique_ptr<io::RecordingReader> open_recording(const std::string& path);
 
 /// How a recording is written.
-enum class Compression { kNone, kBz2, kLz4 };
+enum class Compression { kNone, kBz2, kLz4, kZstd };
 
-/// Starts a recording at @p path: a ROS 1 bag. Nothing appears there until its finish().
+/// True when create_recording() writes rosbag2 (MCAP) at @p path: a name ending in ".mcap" (one
+/// file), in "/" or without an extension (a bag folder). Anything else is a ROS 1 bag.
+bool writes_rosbag2(const std::string& path);
+
+/// Starts a recording at @p path: rosbag2 MCAP when writes_rosbag2(), else a ROS 1 bag (bz2 is
+/// ROS 1's only, zstd MCAP's only). Nothing appears there until its finish().
 /// @throws JobError
 std::unique_ptr<io::RecordingWriter> create_recording(const std::string& path,
                                                       Compression compression = Compression::kNone);
+
+/// Copies @p message to @p out when it can (RecordingWriter::can_copy); else counts it under its
+/// topic in @p left_out: a message of a type that cannot be converted between formats.
+void copy_or_leave_out(io::RecordingWriter& out, const io::RecordedMessage& message,
+                       std::map<std::string, std::int64_t>& left_out);
+/// "N messages on /a, /b (types that cannot be converted between formats)", or "" for none.
+std::string left_out_summary(const std::map<std::string, std::int64_t>& left_out);
 
 /// The current exception (an io error or std::invalid_argument) as JobError.
 [[noreturn]] void rethrow_as_job_error();

@@ -5,6 +5,8 @@
 #     truth and prints a table;
 #  2. filters the real recording that ships with the project (people walking past a stationary
 #     2D LiDAR);
+#  3. converts that recording to rosbag2 MCAP (a bag folder, as `ros2 bag record` makes one),
+#     filters it, and checks that the beams removed are the same as from the ROS 1 bag;
 # and prints a table of both.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -41,4 +43,17 @@ echo
 echo "== recorded: leg_tracker demo bag (stationary Hokuyo, people walking), no ground truth"
 $dispel filter data/leg_tracker/demo_stationary_simple_environment.bag -o "$out/filtered.bag" \
   --static-sensor --scale-to-scanner --stats "$out/stats.json" "$@"
-echo "outputs in $out/: bags to replay (/scan_filtered), statistics as JSON"
+echo
+echo "== the same recording as a ROS 2 user has it: a rosbag2 MCAP bag folder"
+rm -rf "$out/demo_ros2" "$out/filtered_ros2"  # A bag folder is never replaced.
+$dispel convert data/leg_tracker/demo_stationary_simple_environment.bag -o "$out/demo_ros2" \
+  --compression zstd
+$dispel filter "$out/demo_ros2" -o "$out/filtered_ros2" --static-sensor --scale-to-scanner \
+  --stats "$out/stats_ros2.json" "$@"
+/usr/bin/python3 - "$out/stats.json" "$out/stats_ros2.json" <<'PY'
+import json, sys
+a, b = (json.load(open(p))["beams_removed"] for p in sys.argv[1:3])
+print("beams removed: ROS 1 bag %s, rosbag2 MCAP %s: %s" % (a, b, "the same" if a == b else "DIFFERENT"))
+sys.exit(0 if a == b else 1)
+PY
+echo "outputs in $out/: filtered.bag (ROS 1) and filtered_ros2/ (rosbag2 MCAP) to replay (/scan_filtered)"

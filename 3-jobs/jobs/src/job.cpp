@@ -22,10 +22,23 @@ void check_cancelled(const std::atomic<bool>* cancel) {
   if (cancel != nullptr && cancel->load()) throw JobCancelled();
 }
 
+namespace {
+
+// A rosbag2 bag folder: read as a whole, where other inputs must be regular files.
+bool is_bag_folder(const std::string& path) {
+  std::error_code ec;
+  return std::filesystem::is_directory(path, ec) &&
+         std::filesystem::exists(std::filesystem::path(path) / "metadata.yaml", ec);
+}
+
+}  // namespace
+
 void check_input_file(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) throw JobError(path + ": " + std::strerror(errno));
-  if (!S_ISREG(st.st_mode)) throw JobError(path + ": not a regular file");
+  if (!S_ISREG(st.st_mode) && !is_bag_folder(path)) {
+    throw JobError(path + ": not a regular file (nor a rosbag2 bag folder with metadata.yaml)");
+  }
 }
 
 void rethrow_as_job_error() {
@@ -129,10 +142,7 @@ void check_files(const std::vector<FileArgument>& inputs,
     std::error_code ec;
     const fs::file_status st = fs::status(f.path, ec);
     if (ec || !fs::exists(st)) continue;  // The reader says "No such file" in its own words.
-    // A rosbag2 bag folder is read as a whole; any other input must be a regular file.
-    const bool bag_folder =
-        fs::is_directory(st) && fs::exists(fs::path(f.path) / "metadata.yaml", ec);
-    if (!fs::is_regular_file(st) && !bag_folder) {
+    if (!fs::is_regular_file(st) && !is_bag_folder(f.path)) {
       throw JobError(named(f) + ": not a regular file (" + file_type(st) + ")");
     }
     in.emplace_back(&f, place_of(f));

@@ -116,7 +116,9 @@ void check_output_place(const FileArgument& out) {
   const fs::file_status st = fs::status(out.path, ec);
   if (!ec && fs::is_directory(st)) throw JobError(named(out) + ": is a directory");
   if (!ec && fs::exists(st) && !fs::is_regular_file(st)) return;  // /dev/null: written in place.
-  fs::path parent = fs::path(out.path).parent_path();
+  std::string name = out.path;  // "OUT/" names the bag folder OUT.
+  while (name.size() > 1 && name.back() == '/') name.pop_back();
+  fs::path parent = fs::path(name).parent_path();
   if (parent.empty()) parent = ".";
   const fs::file_status dir = fs::status(parent, ec);
   if (ec || !fs::exists(dir)) {
@@ -197,7 +199,12 @@ bool writes_rosbag2(const std::string& path) {
   if (ends_with(path, ".mcap")) return true;
   if (ends_with(path, ".bag") || path.empty()) return false;
   if (path.back() == '/') return true;
-  // A name without an extension is a bag folder, as `ros2 bag record -o NAME` makes one.
+  // A name without an extension is a bag folder, as `ros2 bag record -o NAME` makes one, unless
+  // it names something that is not a folder already (a device such as /dev/null, a pipe, a
+  // file): that is written as before, a ROS 1 bag.
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (!ec && fs::exists(st) && !fs::is_directory(st)) return false;
   return fs::path(path).extension().empty();
 }
 

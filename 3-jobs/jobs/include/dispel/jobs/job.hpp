@@ -63,7 +63,8 @@ std::unique_ptr<io::RecordingReader> open_recording(const std::string& path);
 enum class Compression { kNone, kBz2, kLz4, kZstd };
 
 /// True when create_recording() writes rosbag2 (MCAP) at @p path: a name ending in ".mcap" (one
-/// file), in "/" or without an extension (a bag folder). Anything else is a ROS 1 bag.
+/// file), in "/" or without an extension (a bag folder; unless it names a file, device or pipe
+/// that exists). Anything else is a ROS 1 bag.
 bool writes_rosbag2(const std::string& path);
 
 /// Starts a recording at @p path: rosbag2 MCAP when writes_rosbag2(), else a ROS 1 bag (bz2 is

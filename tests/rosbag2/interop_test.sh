@@ -9,7 +9,7 @@
 #   3. `dispel filter` on the shipped ROS 1 recording and on its MCAP conversion gives the same
 #      filtered scans and labels, and the MCAP output is valid;
 #   4. every command that reads or writes a recording does so in MCAP: sim (a bag folder), filter,
-#      eval, render, odom.
+#      eval, render, odom, slam.
 # Usage: interop_test.sh DISPEL WORK_DIR SOURCE_DIR
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -58,7 +58,7 @@ for topic in /scan /scan_filtered /scan_labels; do
   same filtered_from_bag.jsonl filtered.jsonl --topics "$topic"
 done
 
-step "4. sim, filter, eval, render and odom on MCAP"
+step "4. sim, filter, eval, render, odom and slam on MCAP"
 "$dispel" sim "$source_dir/config/scenarios/thesis_hall.yaml" --duration 6 --seed 3 -o sim
 check sim/sim_0.mcap
 "$dispel" filter sim -o sim_filtered.mcap
@@ -73,4 +73,8 @@ node -e 'const e = JSON.parse(require("fs").readFileSync("eval.json", "utf8"));
 test -s sim.png
 "$dispel" odom sim -o odom.csv
 test "$(wc -l < odom.csv)" -gt 10
+if "$dispel" slam --help > /dev/null 2>&1; then  # Built with MRPT's SLAM (dispel-slam).
+  "$dispel" slam sim_filtered.mcap -o slam.csv
+  test "$(wc -l < slam.csv)" -gt 100
+fi
 echo "rosbag2_mcap_interop: all passed"

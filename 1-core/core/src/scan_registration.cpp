@@ -351,39 +351,30 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
           Nearby& nearby = nearby_[i];
           double best = kInfinity;
           std::int32_t found = -1;
+          const auto consider = [&](std::int32_t j) {
+            const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
+            if (d2 < best) {
+              best = d2;
+              found = j;
+            }
+            return d2;
+          };
           const std::int32_t begin = candidate_begin_[i], end = candidate_begin_[i + 1];
           if (iteration == 0) {
-            for (std::int32_t j = begin; j < end; ++j) {
-              const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
-              if (d2 < best) {
-                best = d2;
-                found = j;
-              }
-            }
+            for (std::int32_t j = begin; j < end; ++j) consider(j);
           } else {
             if (iteration > 1 && nearby.count >= 0 &&
                 nearby.nearest_m + (q - nearby.at).norm() + (q - nearby.origin).norm() +
                         kDistanceMargin_m <=
                     kNearby_m) {
               for (std::int32_t k = 0; k < nearby.count; ++k) {
-                const std::int32_t j = nearby.index[static_cast<std::size_t>(k)];
-                const double d2 =
-                    (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
-                if (d2 < best) {
-                  best = d2;
-                  found = j;
-                }
+                consider(nearby.index[static_cast<std::size_t>(k)]);
               }
             } else {
               nearby.origin = q;
               nearby.count = 0;
               for (std::int32_t j = begin; j < end; ++j) {
-                const double d2 =
-                    (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
-                if (d2 < best) {
-                  best = d2;
-                  found = j;
-                }
+                const double d2 = consider(j);
                 // Without a branch: written at the count (the last slot takes the overflow),
                 // counted when near.
                 nearby.index[static_cast<std::size_t>(std::min(nearby.count, kNearbyMax))] = j;

@@ -17,6 +17,7 @@ packages=(
                                        # dispel::io_mrpt_rawlog: MRPT rawlogs
   zlib1g-dev                           # io_mrpt_rawlog: gzip-compressed rawlogs, checked whole
   libzstd-dev liblz4-dev               # io_rosbag2: MCAP chunks compressed with zstd or lz4
+  libsqlite3-dev                       # io_rosbag2: sqlite3 storage (.db3)
   mrpt-common                          # tests and docs/results.md: MRPT's datasets, among them
                                        # the SENA wheelchair log (one loop of a building)
   pkg-config libroscpp-dev libtf2-ros-dev libvisualization-msgs-dev libdiagnostic-msgs-dev

@@ -75,21 +75,37 @@ int main(int argc, char** argv) {
                    "Output compression: bz2 or lz4 for a ROS 1 bag, zstd or lz4 for MCAP")
       ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))
       ->capture_default_str();
+  std::string filter_format = "auto";
+  filter_cmd
+      ->add_option("--format", filter_format,
+                   "Output format: auto (by name: .bag ROS 1; .mcap, .db3 or a folder rosbag2), "
+                   "ros1, mcap or sqlite3")
+      ->check(CLI::IsMember({"auto", "ros1", "mcap", "sqlite3"}))
+      ->capture_default_str();
 
   dispel::jobs::ConvertJobOptions convert;
   std::string convert_compression = "none";
   CLI::App* convert_cmd = app.add_subcommand(
       "convert",
-      "Write a recording in another format: ROS 1 bag (.bag) or rosbag2 MCAP (.mcap, or "
-      "a bag folder)");
-  convert_cmd->add_option("input", convert.input, "IN: .bag, .mcap, a rosbag2 folder, .rawlog")
+      "Write a recording in another format: ROS 1 bag (.bag) or rosbag2 (.mcap, .db3, or a bag "
+      "folder)");
+  convert_cmd
+      ->add_option("input", convert.input, "IN: .bag, .mcap, .db3, a rosbag2 folder, .rawlog")
       ->required();
-  convert_cmd->add_option("-o,--output", convert.output, "OUT.bag, OUT.mcap or a new folder OUT")
+  convert_cmd
+      ->add_option("-o,--output", convert.output, "OUT.bag, OUT.mcap, OUT.db3 or a new folder OUT")
       ->required();
   convert_cmd
       ->add_option("--compression", convert_compression,
                    "bz2 or lz4 for a ROS 1 bag, zstd or lz4 for MCAP")
       ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))
+      ->capture_default_str();
+  std::string convert_format = "auto";
+  convert_cmd
+      ->add_option("--format", convert_format,
+                   "Output format: auto (by name: .bag ROS 1; .mcap, .db3 or a folder rosbag2), "
+                   "ros1, mcap or sqlite3")
+      ->check(CLI::IsMember({"auto", "ros1", "mcap", "sqlite3"}))
       ->capture_default_str();
 
   dispel::apps::SimOptions sim;
@@ -231,11 +247,13 @@ int main(int argc, char** argv) {
 #ifdef DISPEL_HAVE_IO
     if (*filter_cmd) {
       if (!config_path.empty()) filter.job.config_path = config_path;
+      filter.job.format = dispel::jobs::recording_format_named(filter_format);
       return dispel::apps::run_filter(filter);
     }
     if (*sim_cmd) return dispel::apps::run_sim(sim);
     if (*convert_cmd) {
       convert.compression = dispel::apps::compression_named(convert_compression);
+      convert.format = dispel::jobs::recording_format_named(convert_format);
       return dispel::apps::run_convert(convert);
     }
     if (*eval_cmd) return dispel::apps::run_eval(evaluation);

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # dispel and the MCAP reference libraries, each reading what the other wrote (ctest
-# rosbag2_mcap_interop):
+# rosbag2_interop):
 #   1. files written by @mcap/core with ROS 2 messages serialised by @foxglove/rosmsg2-serialization
 #      (every chunk compression, many small chunks, big-endian scans) are read by dispel and copied
 #      unchanged: @mcap/core validates the copy (records, CRCs, indexes, summary) and its messages
@@ -9,7 +9,9 @@
 #   3. `dispel filter` on the shipped ROS 1 recording and on its MCAP conversion gives the same
 #      filtered scans and labels, and the MCAP output is valid;
 #   4. every command that reads or writes a recording does so in MCAP: sim (a bag folder), filter,
-#      eval, render, odom, slam.
+#      eval, render, odom, slam;
+#   5. sqlite3 storage: an MCAP recording through a .db3 (checked with Python's sqlite3 module)
+#      and back is the same, and filtering a .db3 gives the same labels.
 # Usage: interop_test.sh DISPEL WORK_DIR SOURCE_DIR
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -77,4 +79,25 @@ if "$dispel" slam --help > /dev/null 2>&1; then  # Built with MRPT's SLAM (dispe
   "$dispel" slam sim_filtered.mcap -o slam.csv
   test "$(wc -l < slam.csv)" -gt 100
 fi
-echo "rosbag2_mcap_interop: all passed"
+step "5. sqlite3 storage: MCAP -> .db3 (checked with Python's sqlite3) -> MCAP, and filtered"
+"$dispel" convert in_zstd.mcap -o in.db3
+/usr/bin/python3 - in.db3 <<'PY'
+import sqlite3, sys
+db = sqlite3.connect(sys.argv[1])
+counts = dict(db.execute("SELECT t.name, COUNT(m.id) FROM topics t JOIN messages m ON m.topic_id = t.id GROUP BY t.name"))
+want = {"/tf_static": 1, "/tf": 100, "/odom": 100, "/scan": 40, "/imu": 200, "/joint_states": 40, "/chatter": 4}
+assert counts == want, counts
+assert db.execute("SELECT schema_version FROM schema").fetchone()[0] == 4
+assert all(q for (q,) in db.execute("SELECT offered_qos_profiles FROM topics"))
+PY
+"$dispel" convert in.db3 -o from_db3.mcap
+check from_db3.mcap --jsonl from_db3.jsonl
+same in_zstd.mcap.expected.jsonl from_db3.jsonl
+"$dispel" convert demo.mcap -o demo.db3
+"$dispel" filter demo.db3 -o filtered_db3 --static-sensor --format sqlite3
+"$dispel" convert filtered_db3 -o filtered_db3.mcap
+check filtered_db3.mcap --jsonl filtered_db3.jsonl
+for topic in /scan_filtered /scan_labels; do
+  same filtered_from_bag.jsonl filtered_db3.jsonl --topics "$topic"
+done
+echo "rosbag2_interop: all passed"

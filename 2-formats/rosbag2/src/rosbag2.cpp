@@ -2,9 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -13,12 +11,13 @@
 #include "dispel/io/errors.hpp"
 #include "dispel/io/ros2_messages.hpp"
 #include "dispel/io/text.hpp"
-#include "mcap.hpp"
+#include "storage.hpp"
 
 namespace dispel::io {
 namespace {
 
 namespace fs = std::filesystem;
+using rosbag2::StoredTopic;
 
 bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() &&
@@ -35,20 +34,21 @@ std::uint64_t ns_of(const Stamp& s) {
   return static_cast<std::uint64_t>(s.sec) * 1000000000ULL + s.nsec;
 }
 
-// One message of an MCAP file being read.
+// One message of a file being read.
 class Rosbag2Message final : public RecordedMessage {
  public:
-  Rosbag2Message(const mcap::MessageView& m, const mcap::Channel& channel,
-                 const mcap::Schema* schema, MessageKind kind, const std::string& path)
-      : m_(m), channel_(channel), schema_(schema), kind_(kind), path_(path) {}
+  Rosbag2Message(const StoredTopic& topic, std::uint64_t ns, const std::uint8_t* data,
+                 std::size_t size, const std::string& path)
+      : topic_(topic), ns_(ns), data_(data), size_(size), path_(path) {}
 
-  const mcap::MessageView& view() const { return m_; }
-  const mcap::Channel& channel() const { return channel_; }
-  const mcap::Schema* schema() const { return schema_; }
+  const StoredTopic& stored() const { return topic_; }
+  std::uint64_t ns() const { return ns_; }
+  const std::uint8_t* data() const { return data_; }
+  std::size_t size() const { return size_; }
 
-  const std::string& topic() const override { return channel_.topic; }
-  MessageKind kind() const override { return kind_; }
-  Stamp time() const override { return stamp_of(m_.log_time); }
+  const std::string& topic() const override { return topic_.name; }
+  MessageKind kind() const override { return topic_.kind; }
+  Stamp time() const override { return stamp_of(ns_); }
   std::optional<ScanMessage> scan() const override {
     return decode(MessageKind::kLaserScan, decode_ros2_scan);
   }
@@ -71,35 +71,36 @@ class Rosbag2Message final : public RecordedMessage {
  private:
   template <typename Fn>
   auto decode(MessageKind kind, Fn fn) const -> std::optional<decltype(fn(nullptr, 0))> {
-    if (kind != kind_) return std::nullopt;
+    if (kind != topic_.kind) return std::nullopt;
     try {
-      return fn(m_.data, m_.size);
+      return fn(data_, size_);
     } catch (const CdrError& e) {
-      throw InputError(one_line(path_ + ": topic " + quote(channel_.topic) + ", message at " +
+      throw InputError(one_line(path_ + ": topic " + quote(topic_.name) + ", message at " +
                                     std::to_string(time().seconds()) + " s: cannot decode (" +
                                     e.what() + ")",
                                 400));
     }
   }
 
-  const mcap::MessageView& m_;
-  const mcap::Channel& channel_;
-  const mcap::Schema* schema_;
-  MessageKind kind_;
+  const StoredTopic& topic_;
+  std::uint64_t ns_;
+  const std::uint8_t* data_;
+  std::size_t size_;
   const std::string& path_;
 };
 
-// The kind of a channel: one of the model's types only when its schema is ros2msg and its
-// messages are CDR.
-MessageKind kind_of(const mcap::Channel& c, const mcap::Schema* s) {
-  if (s == nullptr || c.message_encoding != "cdr" || s->encoding != "ros2msg") {
+// The kind of a topic: one of the model's types only when its messages are CDR and its
+// definition, if the file holds one, is ros2msg.
+MessageKind kind_of(const StoredTopic& t) {
+  if (t.serialization_format != "cdr" ||
+      (!t.definition.empty() && t.definition_encoding != "ros2msg")) {
     return MessageKind::kOther;
   }
-  return ros2_message_kind(s->name);
+  return ros2_message_kind(t.type);
 }
 
-// The .mcap files of a bag folder, from its metadata.yaml.
-std::vector<std::string> files_of_folder(const std::string& folder) {
+// The files of a bag folder, from its metadata.yaml; @p sqlite3 tells their storage.
+std::vector<std::string> files_of_folder(const std::string& folder, bool& sqlite3) {
   const fs::path meta = fs::path(folder) / "metadata.yaml";
   std::error_code ec;
   if (!fs::exists(meta, ec)) {
@@ -119,11 +120,12 @@ std::vector<std::string> files_of_folder(const std::string& folder) {
   try {
     const std::string storage =
         info["storage_identifier"] ? info["storage_identifier"].as<std::string>() : "";
-    if (storage != "mcap") {
+    if (storage != "mcap" && storage != "sqlite3") {
       throw InputError(one_line(meta.string() + ": storage " + quote(storage) +
-                                    "; dispel reads rosbag2 bags stored as mcap",
+                                    "; dispel reads rosbag2 bags stored as mcap or sqlite3",
                                 400));
     }
+    sqlite3 = storage == "sqlite3";
     const std::string compression =
         info["compression_format"] ? info["compression_format"].as<std::string>() : "";
     if (!compression.empty()) {
@@ -162,7 +164,8 @@ bool is_rosbag2_path(const std::string& path) {
 
 struct Rosbag2Reader::Impl {
   std::string path;
-  std::vector<std::unique_ptr<mcap::Reader>> files;
+  bool sqlite3 = false;
+  std::vector<std::unique_ptr<rosbag2::StorageReader>> files;
   Topics topics;
   Stamp begin;
   Stamp end;
@@ -170,41 +173,27 @@ struct Rosbag2Reader::Impl {
 
 Rosbag2Reader::Rosbag2Reader(const std::string& path) : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
+  impl_->sqlite3 = ends_with(path, ".db3");
   std::error_code ec;
-  std::vector<std::string> names;
-  if (fs::is_directory(path, ec)) {
-    names = files_of_folder(path);
-  } else if (ends_with(path, ".db3")) {
-    throw InputError(path +
-                     ": a rosbag2 sqlite3 file; this dispel reads rosbag2 bags stored as "
-                     "mcap only (convert with `ros2 bag convert`)");
-  } else {
-    names = {path};
-  }
+  const std::vector<std::string> names = fs::is_directory(path, ec)
+                                             ? files_of_folder(path, impl_->sqlite3)
+                                             : std::vector<std::string>{path};
   std::map<std::string, TopicInfo> topics;
   bool first = true;
   for (const std::string& name : names) {
-    auto file = std::make_unique<mcap::Reader>(name);
-    if (file->profile() != "ros2") {
-      throw InputError(one_line(name + ": an MCAP file of profile " + quote(file->profile()) +
-                                    ", not a ROS 2 recording (profile \"ros2\")",
-                                400));
-    }
-    for (const auto& [id, c] : file->channels()) {
-      const auto s = file->schemas().find(c.schema_id);
-      const mcap::Schema* schema = s == file->schemas().end() ? nullptr : &s->second;
-      TopicInfo& t = topics[c.topic];
-      if (t.type.empty()) {
-        t.type = schema != nullptr ? schema->name : std::string("(no schema)");
-        t.kind = kind_of(c, schema);
+    auto file = impl_->sqlite3 ? rosbag2::open_sqlite3(name) : rosbag2::open_mcap(name);
+    for (StoredTopic& t : file->topics()) {
+      t.kind = kind_of(t);
+      TopicInfo& info = topics[t.name];
+      if (info.type.empty()) {
+        info.type = t.type.empty() ? std::string("(no schema)") : t.type;
+        info.kind = t.kind;
       }
-      t.messages += static_cast<std::int64_t>(file->messages(id));
+      info.messages += static_cast<std::int64_t>(t.messages);
     }
-    std::uint64_t total = 0;
-    for (const auto& [id, c] : file->channels()) total += file->messages(id);
-    if (total > 0) {
-      const Stamp b = stamp_of(file->start_time());
-      const Stamp e = stamp_of(file->end_time());
+    if (file->total_messages() > 0) {
+      const Stamp b = stamp_of(file->start_ns());
+      const Stamp e = stamp_of(file->end_ns());
       if (first || b < impl_->begin) impl_->begin = b;
       if (first || impl_->end < e) impl_->end = e;
       first = false;
@@ -217,6 +206,9 @@ Rosbag2Reader::Rosbag2Reader(const std::string& path) : impl_(std::make_unique<I
 Rosbag2Reader::~Rosbag2Reader() = default;
 
 const std::string& Rosbag2Reader::path() const { return impl_->path; }
+std::string Rosbag2Reader::format_name() const {
+  return impl_->sqlite3 ? "rosbag2 (sqlite3)" : "rosbag2 (mcap)";
+}
 const Topics& Rosbag2Reader::topics() const { return impl_->topics; }
 Stamp Rosbag2Reader::begin_time() const { return impl_->begin; }
 Stamp Rosbag2Reader::end_time() const { return impl_->end; }
@@ -226,28 +218,15 @@ void Rosbag2Reader::read(const std::vector<std::string>& topics,
   // The files of a folder follow each other in time (rosbag2 splits a recording in order).
   try {
     for (const auto& file : impl_->files) {
-      std::map<std::uint16_t, std::pair<const mcap::Schema*, MessageKind>> kinds;
-      for (const auto& [id, c] : file->channels()) {
-        const auto s = file->schemas().find(c.schema_id);
-        const mcap::Schema* schema = s == file->schemas().end() ? nullptr : &s->second;
-        kinds[id] = {schema, kind_of(c, schema)};
-      }
-      const auto wanted = [&](std::uint16_t id) {
-        if (topics.empty()) return true;
-        const std::string& topic = file->channels().at(id).topic;
-        for (const std::string& t : topics) {
-          if (t == topic) return true;
-        }
-        return false;
-      };
-      file->read(wanted, [&](const mcap::MessageView& m) {
-        const auto k = kinds.find(m.channel_id);
-        const mcap::Channel& c = file->channels().at(m.channel_id);
-        const Rosbag2Message message(m, c, k == kinds.end() ? nullptr : k->second.first,
-                                     k == kinds.end() ? MessageKind::kOther : k->second.second,
-                                     impl_->path);
-        visit(message);
-      });
+      const auto& stored = file->topics();
+      file->read(
+          [&](std::size_t i) {
+            return topics.empty() ||
+                   std::find(topics.begin(), topics.end(), stored[i].name) != topics.end();
+          },
+          [&](std::size_t i, std::uint64_t ns, const std::uint8_t* data, std::size_t size) {
+            visit(Rosbag2Message(stored[i], ns, data, size, impl_->path));
+          });
     }
   } catch (const StopReading&) {
   }
@@ -257,6 +236,9 @@ void Rosbag2Reader::read(const std::vector<std::string>& topics,
 // Writing
 
 namespace {
+
+// The version of metadata.yaml written (integer QoS policies, a list of files).
+constexpr int kMetadataVersion = 5;
 
 // The QoS that rosbag2 records for a topic (offered_qos_profiles, its YAML layout of Humble):
 // reliable, volatile, keep last 10; /tf_static transient local, keep last 1, as tf2 offers it.
@@ -274,17 +256,14 @@ std::string qos_profiles(const std::string& topic) {
 struct Rosbag2Writer::Impl {
   std::string path;
   bool folder = false;
-  std::optional<AtomicFile> atomic;  // A single .mcap file.
+  bool sqlite3 = false;
+  std::optional<AtomicFile> atomic;  // A single file.
   std::string temp_folder;           // A bag folder, while it is written.
-  std::string file_name;             // The .mcap file inside the folder.
-  std::FILE* out = nullptr;
-  std::unique_ptr<mcap::Writer> mcap;
-  std::map<std::string, std::uint16_t> schema_ids;  // By name + definition.
+  std::string file_name;             // The file inside the folder.
+  std::unique_ptr<rosbag2::StorageWriter> storage;
   struct Topic {
-    std::uint16_t channel = 0;
-    std::string type;
-    std::string qos;
-    std::uint64_t messages = 0;
+    std::size_t index = 0;  // In the storage.
+    StoredTopic info;       // Its messages counted.
   };
   std::map<std::string, Topic> topics;
   std::uint64_t messages = 0;
@@ -292,61 +271,55 @@ struct Rosbag2Writer::Impl {
   std::uint64_t last_ns = 0;
   bool finished = false;
 
-  Topic& topic(const std::string& name, const std::string& type, const std::string& encoding,
-               const std::vector<std::uint8_t>& definition,
-               const std::vector<std::pair<std::string, std::string>>& metadata) {
+  // The topic @p name, added as @p make() gives it when new (with the definition dispel knows
+  // when the given one has none).
+  template <typename Make>
+  Topic& topic(const std::string& name, const std::string& type, const Make& make) {
     auto it = topics.find(name);
     if (it != topics.end()) {
-      if (it->second.type != type) {
+      if (it->second.info.type != type) {
         throw OutputError(one_line(path + ": topic " + quote(name) + " written with two types, " +
-                                       quote(it->second.type) + " and " + quote(type),
+                                       quote(it->second.info.type) + " and " + quote(type),
                                    400));
       }
       return it->second;
     }
-    const std::string key =
-        type + '\n' + encoding + '\n' + std::string(definition.begin(), definition.end());
-    auto s = schema_ids.find(key);
-    if (s == schema_ids.end()) {
-      s = schema_ids.emplace(key, mcap->add_schema(type, encoding, definition)).first;
+    Topic t{0, make()};
+    if (t.info.definition.empty() && t.info.kind != MessageKind::kOther) {
+      const std::string& def = ros2_definition(t.info.kind);
+      t.info.definition_encoding = "ros2msg";
+      t.info.definition.assign(def.begin(), def.end());
     }
-    std::string qos;
-    for (const auto& [k, v] : metadata) {
-      if (k == "offered_qos_profiles") qos = v;
-    }
-    Topic t;
-    t.channel = mcap->add_channel(s->second, name, "cdr", metadata);
-    t.type = type;
-    t.qos = qos;
-    return topics.emplace(name, t).first->second;
+    t.info.messages = 0;
+    t.index = storage->add_topic(t.info);
+    return topics.emplace(name, std::move(t)).first->second;
   }
 
-  void put(Topic& t, Stamp time, const std::vector<std::uint8_t>& data) {
-    put(t, ns_of(time), data.data(), data.size());
-  }
   void put(Topic& t, std::uint64_t ns, const std::uint8_t* data, std::size_t size) {
-    mcap->write(t.channel, ns, ns, data, size);
+    storage->write(t.index, ns, data, size);
     if (messages == 0 || ns < first_ns) first_ns = ns;
     if (messages == 0 || ns > last_ns) last_ns = ns;
     ++messages;
-    ++t.messages;
+    ++t.info.messages;
   }
 
   template <typename M>
   void write(const std::string& name, Stamp time, const M& message, MessageKind kind) {
-    const std::string& def = ros2_definition(kind);
-    Topic& t = topic(name, ros2_type_name(kind), "ros2msg",
-                     std::vector<std::uint8_t>(def.begin(), def.end()),
-                     {{"offered_qos_profiles", qos_profiles(name)}});
-    put(t, time, encode_ros2(message));
+    const std::string type = ros2_type_name(kind);
+    Topic& t = topic(name, type, [&] {
+      const rosbag2::Metadata qos = {{"offered_qos_profiles", qos_profiles(name)}};
+      return StoredTopic{name, type, "cdr", qos, "", {}, kind, 0};
+    });
+    const std::vector<std::uint8_t> data = encode_ros2(message);
+    put(t, ns_of(time), data.data(), data.size());
   }
 
   std::string metadata_yaml(const std::string& relative) const {
     YAML::Emitter y;
     y << YAML::BeginMap << YAML::Key << "rosbag2_bagfile_information" << YAML::Value
       << YAML::BeginMap;
-    y << YAML::Key << "version" << YAML::Value << 5;
-    y << YAML::Key << "storage_identifier" << YAML::Value << "mcap";
+    y << YAML::Key << "version" << YAML::Value << kMetadataVersion;
+    y << YAML::Key << "storage_identifier" << YAML::Value << (sqlite3 ? "sqlite3" : "mcap");
     const std::uint64_t duration = messages == 0 ? 0 : last_ns - first_ns;
     y << YAML::Key << "duration" << YAML::Value << YAML::BeginMap << YAML::Key << "nanoseconds"
       << YAML::Value << duration << YAML::EndMap;
@@ -357,11 +330,12 @@ struct Rosbag2Writer::Impl {
     for (const auto& [name, t] : topics) {
       y << YAML::BeginMap << YAML::Key << "topic_metadata" << YAML::Value << YAML::BeginMap;
       y << YAML::Key << "name" << YAML::Value << name;
-      y << YAML::Key << "type" << YAML::Value << t.type;
-      y << YAML::Key << "serialization_format" << YAML::Value << "cdr";
-      y << YAML::Key << "offered_qos_profiles" << YAML::Value << YAML::DoubleQuoted << t.qos;
+      y << YAML::Key << "type" << YAML::Value << t.info.type;
+      y << YAML::Key << "serialization_format" << YAML::Value << t.info.serialization_format;
+      y << YAML::Key << "offered_qos_profiles" << YAML::Value << YAML::DoubleQuoted
+        << rosbag2::value_of(t.info.metadata, "offered_qos_profiles");
       y << YAML::EndMap;
-      y << YAML::Key << "message_count" << YAML::Value << t.messages << YAML::EndMap;
+      y << YAML::Key << "message_count" << YAML::Value << t.info.messages << YAML::EndMap;
     }
     y << YAML::EndSeq;
     y << YAML::Key << "compression_format" << YAML::Value << YAML::DoubleQuoted << "";
@@ -380,15 +354,24 @@ struct Rosbag2Writer::Impl {
   }
 };
 
-Rosbag2Writer::Rosbag2Writer(const std::string& path, Rosbag2Compression compression)
+Rosbag2Writer::Rosbag2Writer(const std::string& path, Rosbag2Compression compression,
+                             Rosbag2Storage storage)
     : impl_(std::make_unique<Impl>()) {
   Impl& w = *impl_;
   w.path = path;
   const auto failed = [&](const std::string& what) {
     throw OutputError(path + ": cannot write (" + what + ")");
   };
+  const bool mcap_file = ends_with(path, ".mcap");
+  const bool db3_file = ends_with(path, ".db3");
+  w.sqlite3 = db3_file || (!mcap_file && storage == Rosbag2Storage::kSqlite3);
+  if (w.sqlite3 && compression != Rosbag2Compression::kNone) {
+    failed(
+        "sqlite3 storage is not compressed: zstd and lz4 compress the chunks of MCAP storage "
+        "only");
+  }
   std::string file;
-  if (ends_with(path, ".mcap")) {
+  if (mcap_file || db3_file) {
     w.atomic.emplace(path);
     file = w.atomic->temp_path();
   } else {
@@ -404,20 +387,23 @@ Rosbag2Writer::Rosbag2Writer(const std::string& path, Rosbag2Compression compres
     w.temp_folder += ".partial";
     fs::remove_all(w.temp_folder, ec);
     if (!fs::create_directory(w.temp_folder, ec)) failed(ec.message());
-    w.file_name = name + "_0.mcap";
+    w.file_name = name + (w.sqlite3 ? "_0.db3" : "_0.mcap");
     file = (fs::path(w.temp_folder) / w.file_name).string();
   }
-  w.out = std::fopen(file.c_str(), "wb");
-  if (w.out == nullptr) failed(std::strerror(errno));
-  const mcap::Compression c = compression == Rosbag2Compression::kZstd  ? mcap::Compression::kZstd
-                              : compression == Rosbag2Compression::kLz4 ? mcap::Compression::kLz4
-                                                                        : mcap::Compression::kNone;
-  w.mcap = std::make_unique<mcap::Writer>(w.out, path, "ros2", c);
+  if (w.sqlite3) {
+    w.storage = rosbag2::create_sqlite3(file, path);
+  } else {
+    w.storage =
+        rosbag2::create_mcap(file, path,
+                             compression == Rosbag2Compression::kZstd  ? mcap::Compression::kZstd
+                             : compression == Rosbag2Compression::kLz4 ? mcap::Compression::kLz4
+                                                                       : mcap::Compression::kNone);
+  }
 }
 
 Rosbag2Writer::~Rosbag2Writer() {
   Impl& w = *impl_;
-  if (w.out != nullptr) std::fclose(w.out);
+  w.storage.reset();  // Closed before its file is removed.
   if (!w.finished && w.folder && !w.temp_folder.empty()) {
     std::error_code ec;
     fs::remove_all(w.temp_folder, ec);
@@ -434,12 +420,9 @@ void Rosbag2Writer::copy(const RecordedMessage& message) {
     write_decoded(*this, message);
     return;
   }
-  const mcap::Schema* s = own->schema();
-  static const std::vector<std::uint8_t> kNone;
-  Impl::Topic& t = impl_->topic(own->topic(), s != nullptr ? s->name : std::string(),
-                                s != nullptr ? s->encoding : std::string(),
-                                s != nullptr ? s->data : kNone, own->channel().metadata);
-  impl_->put(t, own->view().log_time, own->view().data, own->view().size);
+  const StoredTopic& s = own->stored();
+  Impl::Topic& t = impl_->topic(s.name, s.type, [&] { return s; });
+  impl_->put(t, own->ns(), own->data(), own->size());
   ++written_;
 }
 
@@ -466,24 +449,17 @@ void Rosbag2Writer::write(const std::string& topic, Stamp time, const ImuMessage
 
 void Rosbag2Writer::finish() {
   Impl& w = *impl_;
-  w.mcap->finish();
-  const int closed = std::fclose(w.out);
-  w.out = nullptr;
-  if (closed != 0) throw OutputError(w.path + ": cannot write (" + std::strerror(errno) + ")");
+  const std::string text =
+      w.metadata_yaml(w.folder ? w.file_name : fs::path(w.path).filename().string());
+  // A sqlite3 file keeps the metadata too, the mapping under rosbag2_bagfile_information.
+  w.storage->finish(YAML::Dump(YAML::Load(text)["rosbag2_bagfile_information"]), kMetadataVersion);
   if (!w.folder) {
     w.atomic->commit();
     w.finished = true;
     return;
   }
   // The metadata last, then the folder into place.
-  const std::string meta = (fs::path(w.temp_folder) / "metadata.yaml").string();
-  std::FILE* m = std::fopen(meta.c_str(), "wb");
-  if (m == nullptr) throw OutputError(meta + ": cannot write (" + std::strerror(errno) + ")");
-  const std::string text = w.metadata_yaml(w.file_name);
-  const bool ok = std::fwrite(text.data(), 1, text.size(), m) == text.size();
-  if (std::fclose(m) != 0 || !ok) {
-    throw OutputError(meta + ": cannot write (" + std::strerror(errno) + ")");
-  }
+  write_file_atomically((fs::path(w.temp_folder) / "metadata.yaml").string(), text);
   std::error_code ec;
   std::string target = w.path;
   while (target.size() > 1 && target.back() == '/') target.pop_back();

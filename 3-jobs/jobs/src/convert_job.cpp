@@ -12,7 +12,8 @@ ConvertJobStats run_convert_job(const ConvertJobOptions& o, const Progress& prog
   stats.input_format = in->format_name();
   std::int64_t all_messages = 0;
   for (const auto& [name, info] : in->topics().all()) all_messages += info.messages;
-  const std::unique_ptr<io::RecordingWriter> out = create_recording(o.output, o.compression);
+  const std::unique_ptr<io::RecordingWriter> out =
+      create_recording(o.output, o.compression, o.format);
   as_job([&] {
     in->read({}, [&](const io::RecordedMessage& m) {
       check_cancelled(cancel);

@@ -9,6 +9,7 @@
 #include <std_msgs/String.h>
 
 #include <filesystem>
+#include <fstream>
 #include <vector>
 
 #include "dispel/io/ros1_messages.hpp"
@@ -112,6 +113,33 @@ TEST(ConvertJob, ACompressionTheFormatHasNotAndAFolderThatExistsAreRefused) {
             std::string::npos);
   EXPECT_FALSE(fs::exists(temp_path("x.mcap")));
   EXPECT_FALSE(fs::exists(temp_path("x.bag")));
+}
+
+TEST(ConvertJob, Sqlite3ByNameOrAskedForAndANameThatSaysOtherwiseIsRefused) {
+  const std::string in = ros1_bag("convert_sqlite3_in.bag");
+  const std::string db3 = temp_path("convert.db3");
+  const std::string folder = temp_path("convert_sqlite3_folder");
+  fs::remove(db3);
+  fs::remove_all(folder);
+  EXPECT_EQ(run_convert_job({in, db3, Compression::kNone}).messages_out, 20);
+  EXPECT_EQ(open_recording(db3)->format_name(), "rosbag2 (sqlite3)");
+  EXPECT_EQ(scans_of(db3).size(), 20U);
+  run_convert_job({db3, folder, Compression::kNone, RecordingFormat::kSqlite3});
+  EXPECT_TRUE(fs::exists(fs::path(folder) / "convert_sqlite3_folder_0.db3"));
+  EXPECT_EQ(scans_of(folder).size(), 20U);
+  EXPECT_NE(error_of({in, temp_path("y.mcap"), Compression::kNone, RecordingFormat::kSqlite3})
+                .find("the name says MCAP storage"),
+            std::string::npos);
+  EXPECT_NE(error_of({in, temp_path("y.db3"), Compression::kLz4}).find("not compressed"),
+            std::string::npos);
+  // --format ros1 whatever the name.
+  const std::string ros1 = temp_path("really_ros1.mcap");
+  fs::remove(ros1);
+  run_convert_job({db3, ros1, Compression::kNone, RecordingFormat::kRos1});
+  std::ifstream f(ros1, std::ios::binary);
+  std::string first_line;
+  std::getline(f, first_line);
+  EXPECT_EQ(first_line, "#ROSBAG V2.0");
 }
 
 TEST(ConvertJob, ABagFolderIsAnInputWhereOtherFoldersAreNot) {

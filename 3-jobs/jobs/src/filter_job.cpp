@@ -195,7 +195,8 @@ FilterJobStats run_recording(const FilterJobOptions& o, const Progress& progress
   }
 
   ScanFilter filter(o, stats);
-  const std::unique_ptr<io::RecordingWriter> out = create_recording(o.output, o.compression);
+  const std::unique_ptr<io::RecordingWriter> out =
+      create_recording(o.output, o.compression, o.format);
   std::int64_t all_messages = 0;
   for (const auto& [name, info] : topics.all()) all_messages += info.messages;
   as_job([&] {
@@ -261,7 +262,8 @@ FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
   check_period(o, period.period(), log.scans.front().scan);
 
   ScanFilter filter(o, stats);
-  const std::unique_ptr<io::RecordingWriter> out = create_recording(o.output, o.compression);
+  const std::unique_ptr<io::RecordingWriter> out =
+      create_recording(o.output, o.compression, o.format);
   as_job([&] {
     // The mounts, at the first stamp.
     double first = std::numeric_limits<double>::infinity();

@@ -196,7 +196,7 @@ std::unique_ptr<io::RecordingReader> open_recording(const std::string& path) {
 }
 
 bool writes_rosbag2(const std::string& path) {
-  if (ends_with(path, ".mcap")) return true;
+  if (ends_with(path, ".mcap") || ends_with(path, ".db3")) return true;
   if (ends_with(path, ".bag") || path.empty()) return false;
   if (path.back() == '/') return true;
   // A name without an extension is a bag folder, as `ros2 bag record -o NAME` makes one, unless
@@ -209,27 +209,50 @@ bool writes_rosbag2(const std::string& path) {
 }
 
 std::unique_ptr<io::RecordingWriter> create_recording(const std::string& path,
-                                                      Compression compression) {
+                                                      Compression compression,
+                                                      RecordingFormat format) {
   if (path.empty()) throw JobError("no output file given");
-  if (writes_rosbag2(path)) {
-    if (compression == Compression::kBz2) {
-      throw JobError(path +
-                     ": a rosbag2 MCAP recording compresses its chunks with zstd or lz4, "
-                     "not bz2");
+  if (format == RecordingFormat::kByName) {
+    format = !writes_rosbag2(path)  ? RecordingFormat::kRos1
+             : writes_sqlite3(path) ? RecordingFormat::kSqlite3
+                                    : RecordingFormat::kMcap;
+  }
+  if (format == RecordingFormat::kRos1) {
+    if (compression == Compression::kZstd) {
+      throw JobError(path + ": a ROS 1 bag compresses with bz2 or lz4, not zstd");
     }
-    const io::Rosbag2Compression c =
-        compression == Compression::kZstd  ? io::Rosbag2Compression::kZstd
-        : compression == Compression::kLz4 ? io::Rosbag2Compression::kLz4
-                                           : io::Rosbag2Compression::kNone;
-    return as_job([&] { return std::make_unique<io::Rosbag2Writer>(path, c); });
+    const io::BagCompression c = compression == Compression::kBz2   ? io::BagCompression::kBz2
+                                 : compression == Compression::kLz4 ? io::BagCompression::kLz4
+                                                                    : io::BagCompression::kNone;
+    return as_job([&] { return std::make_unique<io::Ros1BagWriter>(path, c); });
   }
-  if (compression == Compression::kZstd) {
-    throw JobError(path + ": a ROS 1 bag compresses with bz2 or lz4, not zstd");
+  const bool sqlite3 = format == RecordingFormat::kSqlite3;
+  if (ends_with(path, sqlite3 ? ".mcap" : ".db3")) {
+    throw JobError(path + ": the name says " + (sqlite3 ? "MCAP" : "sqlite3") +
+                   " storage, the format asked " + (sqlite3 ? "sqlite3" : "MCAP") +
+                   ": name the output .db3, .mcap or a folder to match");
   }
-  const io::BagCompression c = compression == Compression::kBz2   ? io::BagCompression::kBz2
-                               : compression == Compression::kLz4 ? io::BagCompression::kLz4
-                                                                  : io::BagCompression::kNone;
-  return as_job([&] { return std::make_unique<io::Ros1BagWriter>(path, c); });
+  if (compression == Compression::kBz2 || (sqlite3 && compression != Compression::kNone)) {
+    throw JobError(path + (sqlite3 ? ": rosbag2 sqlite3 storage is not compressed"
+                                   : ": a rosbag2 MCAP recording compresses its chunks with zstd "
+                                     "or lz4, not bz2"));
+  }
+  const io::Rosbag2Compression c = compression == Compression::kZstd ? io::Rosbag2Compression::kZstd
+                                   : compression == Compression::kLz4
+                                       ? io::Rosbag2Compression::kLz4
+                                       : io::Rosbag2Compression::kNone;
+  const io::Rosbag2Storage storage =
+      sqlite3 ? io::Rosbag2Storage::kSqlite3 : io::Rosbag2Storage::kMcap;
+  return as_job([&] { return std::make_unique<io::Rosbag2Writer>(path, c, storage); });
+}
+
+bool writes_sqlite3(const std::string& path) { return ends_with(path, ".db3"); }
+
+RecordingFormat recording_format_named(const std::string& name) {
+  if (name == "ros1") return RecordingFormat::kRos1;
+  if (name == "mcap") return RecordingFormat::kMcap;
+  if (name == "sqlite3") return RecordingFormat::kSqlite3;
+  return RecordingFormat::kByName;
 }
 
 void copy_or_leave_out(io::RecordingWriter& out, const io::RecordedMessage& message,

@@ -15,7 +15,7 @@ namespace dispel::jobs {
 
 SimulationWriter::SimulationWriter(const sim::Scenario& scenario, const std::string& path)
     : scan_time_s_(static_cast<float>(1.0 / scenario.lidar.rate_hz)),
-      out_(create_recording(path, Compression::kLz4)) {
+      out_(create_recording(path, writes_sqlite3(path) ? Compression::kNone : Compression::kLz4)) {
   as_job([&] {
     // The first scan and sample of a run are stamped with the scenario's start time.
     const io::Stamp start = io::Stamp::from_seconds(scenario.start_time_s);

@@ -18,6 +18,7 @@ struct ConvertJobOptions {
   std::string input;   ///< Any recording open_recording() reads.
   std::string output;  ///< Its format by name (create_recording()).
   Compression compression = Compression::kNone;
+  RecordingFormat format = RecordingFormat::kByName;
 };
 
 struct ConvertJobStats {

@@ -29,6 +29,7 @@ struct FilterJobOptions {
   bool static_sensor = false;     ///< The sensor does not move: identity pose, no odometry.
   bool scale_to_scanner = false;  ///< Apply scale_to_scanner() with the recording's scanner.
   Compression compression = Compression::kNone;
+  RecordingFormat format = RecordingFormat::kByName;  ///< Of the output.
   /// How far beyond the first or last odometry message a scan's pose may be taken from it.
   double odom_tolerance_s = 0.05;
 };

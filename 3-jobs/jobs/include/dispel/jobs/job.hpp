@@ -62,16 +62,27 @@ std::unique_ptr<io::RecordingReader> open_recording(const std::string& path);
 /// How a recording is written.
 enum class Compression { kNone, kBz2, kLz4, kZstd };
 
-/// True when create_recording() writes rosbag2 (MCAP) at @p path: a name ending in ".mcap" (one
-/// file), in "/" or without an extension (a bag folder; unless it names a file, device or pipe
-/// that exists). Anything else is a ROS 1 bag.
+/// True when create_recording() writes rosbag2 at @p path: a name ending in ".mcap" or ".db3" (one
+/// file, MCAP or sqlite3), in "/" or without an extension (a bag folder; unless it names a file,
+/// device or pipe that exists). Anything else is a ROS 1 bag.
 bool writes_rosbag2(const std::string& path);
 
-/// Starts a recording at @p path: rosbag2 MCAP when writes_rosbag2(), else a ROS 1 bag (bz2 is
-/// ROS 1's only, zstd MCAP's only). Nothing appears there until its finish().
-/// @throws JobError
-std::unique_ptr<io::RecordingWriter> create_recording(const std::string& path,
-                                                      Compression compression = Compression::kNone);
+/// True for a name ending in ".db3": rosbag2 sqlite3, which is never compressed.
+bool writes_sqlite3(const std::string& path);
+
+/// The format of a recording to write: by its name (writes_rosbag2(): ".db3" sqlite3, other
+/// rosbag2 names MCAP, else ROS 1), or as asked (`--format`).
+enum class RecordingFormat { kByName, kRos1, kMcap, kSqlite3 };
+/// "ros1", "mcap", "sqlite3" as a RecordingFormat; anything else kByName.
+RecordingFormat recording_format_named(const std::string& name);
+
+/// Starts a recording at @p path in @p format (a rosbag2 storage asked for writes a bag folder
+/// unless the name ends in its own extension; a name with the other one is refused). bz2 is ROS 1's
+/// only compression, zstd MCAP's only; sqlite3 is not compressed. Nothing appears there until its
+/// finish(). @throws JobError
+std::unique_ptr<io::RecordingWriter> create_recording(
+    const std::string& path, Compression compression = Compression::kNone,
+    RecordingFormat format = RecordingFormat::kByName);
 
 /// Copies @p message to @p out when it can (RecordingWriter::can_copy); else counts it under its
 /// topic in @p left_out: a message of a type that cannot be converted between formats.

@@ -493,3 +493,93 @@ TEST_F(Rosbag2, Sqlite3IsNeverCompressedAndAnUnfinishedOneLeavesNothing) {
 
 }  // namespace
 }  // namespace dispel::io
+
+namespace dispel::io {
+namespace {
+
+// A bag folder as Jazzy's rosbag2 writes it (metadata version 9: QoS as a YAML list, custom_data,
+// ros_distro), split over two files: both are read, one after the other.
+TEST_F(Rosbag2, AJazzyBagFolderSplitOverTwoFilesIsReadWhole) {
+  const auto write_part = [&](const std::string& name, int first) {
+    Rosbag2Writer w(at(name), Rosbag2Compression::kZstd);
+    for (int i = first; i < first + 50; ++i) w.write("/scan", scan_at(i).header.stamp, scan_at(i));
+    w.finish();
+  };
+  write_part("part_0.mcap", 0);
+  write_part("part_1.mcap", 50);
+  fs::create_directories(at("jazzy"));
+  fs::rename(at("part_0.mcap"), at("jazzy/part_0.mcap"));
+  fs::rename(at("part_1.mcap"), at("jazzy/part_1.mcap"));
+  const std::string metadata = R"(rosbag2_bagfile_information:
+  version: 9
+  storage_identifier: mcap
+  duration:
+    nanoseconds: 9900000000
+  starting_time:
+    nanoseconds_since_epoch: 1700000000000000000
+  message_count: 100
+  topics_with_message_count:
+    - topic_metadata:
+        name: /scan
+        type: sensor_msgs/msg/LaserScan
+        serialization_format: cdr
+        offered_qos_profiles:
+          - history: keep_last
+            depth: 10
+            reliability: best_effort
+            durability: volatile
+            deadline:
+              sec: 9223372036
+              nsec: 854775807
+            lifespan:
+              sec: 9223372036
+              nsec: 854775807
+            liveliness: automatic
+            liveliness_lease_duration:
+              sec: 9223372036
+              nsec: 854775807
+            avoid_ros_namespace_conventions: false
+        type_description_hash: RIHS01_64ae8ee3ae8ab8b3e9a1d7f2c5f1b7ae2b1b6b2c8a3d5e6f7a8b9c0d1e2f3a4b
+      message_count: 100
+  compression_format: ""
+  compression_mode: ""
+  relative_file_paths:
+    - part_0.mcap
+    - part_1.mcap
+  files:
+    - path: part_0.mcap
+      starting_time:
+        nanoseconds_since_epoch: 1700000000000000000
+      duration:
+        nanoseconds: 4900000000
+      message_count: 50
+    - path: part_1.mcap
+      starting_time:
+        nanoseconds_since_epoch: 1700000005000000000
+      duration:
+        nanoseconds: 4900000000
+      message_count: 50
+  custom_data: ~
+  ros_distro: jazzy
+)";
+  put(at("jazzy/metadata.yaml"), std::vector<char>(metadata.begin(), metadata.end()));
+  Rosbag2Reader r(at("jazzy"));
+  EXPECT_EQ(r.topics().messages("/scan"), 100);
+  EXPECT_EQ(r.begin_time(), scan_at(0).header.stamp);
+  EXPECT_EQ(r.end_time(), scan_at(99).header.stamp);
+  int n = 0;
+  r.read({}, [&](const RecordedMessage& m) {
+    EXPECT_EQ(m.scan()->header.stamp, scan_at(n).header.stamp);
+    ++n;
+  });
+  EXPECT_EQ(n, 100);
+  // A file named outside the folder is refused.
+  std::string escaping = metadata;
+  escaping.replace(escaping.find("    - part_1.mcap"), 17, "    - ../part_1.mcap");
+  put(at("jazzy/metadata.yaml"), std::vector<char>(escaping.begin(), escaping.end()));
+  EXPECT_NE(error_of(at("jazzy")).find("not a name inside the bag folder"), std::string::npos)
+      << error_of(at("jazzy"));
+}
+
+}  // namespace
+}  // namespace dispel::io

@@ -201,6 +201,17 @@ TEST_F(Rosbag2, ACorruptOrCutFileIsOneLineNamingTheProblem) {
     }
   }
   EXPECT_GT(errors, 0);
+  // A byte of a message changed in an uncompressed file (the middle of the file is inside its
+  // one chunk): the chunk's CRC says so when the chunk is read.
+  {
+    Rosbag2Writer w(at("plain.mcap"), Rosbag2Compression::kNone);
+    write_recording(w);
+  }
+  b = bytes_of(at("plain.mcap"));
+  b[b.size() / 2] = static_cast<char>(b[b.size() / 2] ^ 0x01);
+  put(at("crc.mcap"), b);
+  EXPECT_NE(error_of(at("crc.mcap")).find("a chunk's CRC does not match"), std::string::npos)
+      << error_of(at("crc.mcap"));
   fs::create_directories(at("nometa"));
   EXPECT_NE(error_of(at("nometa")).find("without metadata.yaml"), std::string::npos);
   fs::create_directories(at("foo"));

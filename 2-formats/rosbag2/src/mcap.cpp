@@ -158,11 +158,11 @@ const char* compression_name(Compression c) {
 // Reader
 
 Reader::Reader(std::string path) : path_(std::move(path)) {
-  file_ = std::fopen(path_.c_str(), "rb");
+  file_.reset(std::fopen(path_.c_str(), "rb"));
   if (file_ == nullptr) throw InputError(path_ + ": cannot open (" + reason() + ")");
-  if (std::fseek(file_, 0, SEEK_END) != 0)
+  if (std::fseek(file_.get(), 0, SEEK_END) != 0)
     throw InputError(path_ + ": cannot read (" + reason() + ")");
-  const long end = std::ftell(file_);
+  const long end = std::ftell(file_.get());
   if (end < 0) throw InputError(path_ + ": cannot read (" + reason() + ")");
   size_ = static_cast<std::uint64_t>(end);
   constexpr std::uint64_t kSmallest = 8 + kRecordHead + kFooterBody + 8;
@@ -221,9 +221,7 @@ Reader::Reader(std::string path) : path_(std::move(path)) {
   if (!indexed_) scan_data_section();
 }
 
-Reader::~Reader() {
-  if (file_ != nullptr) std::fclose(file_);
-}
+Reader::~Reader() = default;
 
 std::uint64_t Reader::messages(std::uint16_t channel_id) const {
   const auto it = counts_.find(channel_id);
@@ -241,8 +239,8 @@ std::vector<std::uint8_t> Reader::bytes_at(std::uint64_t offset, std::uint64_t s
             " runs past the end of the file");
   }
   std::vector<std::uint8_t> out(static_cast<std::size_t>(size));
-  if (std::fseek(file_, static_cast<long>(offset), SEEK_SET) != 0 ||
-      (size > 0 && std::fread(out.data(), 1, out.size(), file_) != out.size())) {
+  if (std::fseek(file_.get(), static_cast<long>(offset), SEEK_SET) != 0 ||
+      (size > 0 && std::fread(out.data(), 1, out.size(), file_.get()) != out.size())) {
     throw InputError(path_ + ": cannot read (" + reason() + ")");
   }
   return out;

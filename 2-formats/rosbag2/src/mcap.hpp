@@ -82,7 +82,8 @@ class Reader {
   [[noreturn]] void corrupt(const std::string& what) const;
 
   std::string path_;
-  std::FILE* file_ = nullptr;
+  /// Closed when the reader goes, and when its constructor throws (a member, not the destructor).
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file_{nullptr, &std::fclose};
   std::uint64_t size_ = 0;
   std::uint64_t data_end_ = 0;  ///< Where the data section ends (the summary or the footer).
   std::string profile_;

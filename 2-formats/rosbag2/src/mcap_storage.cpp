@@ -58,7 +58,12 @@ class McapWriter final : public StorageWriter {
   McapWriter(const std::string& file, const std::string& name, mcap::Compression compression)
       : name_(name), out_(std::fopen(file.c_str(), "wb")) {
     if (out_ == nullptr) failed();
-    mcap_ = std::make_unique<mcap::Writer>(out_, name, "ros2", compression);
+    try {
+      mcap_ = std::make_unique<mcap::Writer>(out_, name, "ros2", compression);
+    } catch (...) {  // The destructor does not run for a constructor that throws.
+      std::fclose(out_);
+      throw;
+    }
   }
   ~McapWriter() override {
     mcap_.reset();

@@ -594,3 +594,35 @@ TEST_F(Rosbag2, AJazzyBagFolderSplitOverTwoFilesIsReadWhole) {
 
 }  // namespace
 }  // namespace dispel::io
+
+namespace dispel::io {
+namespace {
+
+std::size_t open_files() {
+  std::size_t n = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator("/proc/self/fd")) ++n;
+  return n;
+}
+
+// Found by the fuzz target: a file refused while it was being opened kept its descriptor, and
+// after some 20000 refusals nothing more could be opened.
+TEST_F(Rosbag2, ARefusedFileLeavesNoDescriptorOpen) {
+  {
+    Rosbag2Writer w(at("good.mcap"), Rosbag2Compression::kNone);
+    write_recording(w);
+  }
+  std::vector<char> b = bytes_of(at("good.mcap"));
+  put(at("cut.mcap"), std::vector<char>(b.begin(), b.begin() + static_cast<long>(b.size() / 2)));
+  b[b.size() - 30] = 'x';  // The footer.
+  put(at("footer.mcap"), b);
+  const std::size_t before = open_files();
+  for (int i = 0; i < 50; ++i) {
+    EXPECT_FALSE(error_of(at("cut.mcap")).empty());
+    EXPECT_FALSE(error_of(at("footer.mcap")).empty());
+    EXPECT_FALSE(error_of(at("missing.mcap")).empty());
+  }
+  EXPECT_EQ(open_files(), before);
+}
+
+}  // namespace
+}  // namespace dispel::io

@@ -388,17 +388,10 @@ void Reader::scan_data_section() {
               });
 }
 
-void Reader::read_linear(const std::function<bool(std::uint16_t)>& wanted,
-                         const std::function<void(const MessageView&)>& visit) {
-  // Messages outside an index are collected, sorted by time (stable) and given in order.
-  struct Held {
-    MessageView m;
-    std::size_t buffer;
-  };
-  std::vector<std::vector<std::uint8_t>> buffers;
-  std::vector<Held> held;
-  const auto take = [&](const std::uint8_t* p, std::size_t n, std::size_t buffer,
-                        std::uint64_t base) {
+void Reader::take_records(const std::uint8_t* p, std::size_t n, std::uint64_t base,
+                          const std::function<void(const MessageView&, std::size_t)>& on_message) {
+  const std::string where = " (in the record or chunk at byte " + std::to_string(base) + ")";
+  try {
     each_record(p, n, [&](std::uint8_t op, Fields f, std::size_t at) {
       if (op == kSchema) {
         Schema s = parse_schema(f);
@@ -409,15 +402,34 @@ void Reader::read_linear(const std::function<bool(std::uint16_t)>& wanted,
       } else if (op == kMessage) {
         const MessageView m = parse_message(f);
         if (channels_.count(m.channel_id) == 0) {
-          throw std::length_error("a message at byte " + std::to_string(base + at) +
-                                  " is on channel " + std::to_string(m.channel_id) +
+          throw std::length_error("a message on channel " + std::to_string(m.channel_id) +
                                   ", which was not defined before it");
         }
-        if (wanted(m.channel_id)) held.push_back({m, buffer});
+        on_message(m, at);
       } else if (op == kChunk) {
-        throw std::logic_error(std::to_string(base + at));  // Handled by the caller.
+        throw std::length_error("a chunk inside a chunk");
       }
     });
+  } catch (const std::length_error& e) {
+    throw std::length_error(e.what() + where);
+  }
+}
+
+void Reader::read_linear(const std::function<bool(std::uint16_t)>& wanted,
+                         const std::function<void(const MessageView&)>& visit) {
+  // Messages outside an index are collected, sorted by time (stable) and given in order.
+  struct Held {
+    MessageView m;
+    std::size_t buffer;
+  };
+  std::vector<std::vector<std::uint8_t>> buffers;
+  std::vector<Held> held;
+  const auto take = [&](std::uint64_t base) {
+    const std::size_t buffer = buffers.size() - 1;
+    take_records(buffers.back().data(), buffers.back().size(), base,
+                 [&](const MessageView& m, std::size_t) {
+                   if (wanted(m.channel_id)) held.push_back({m, buffer});
+                 });
   };
   std::uint64_t at = 8;
   buffers.reserve(64);
@@ -433,17 +445,15 @@ void Reader::read_linear(const std::function<bool(std::uint16_t)>& wanted,
       if (head[0] == kDataEnd) break;
       if (head[0] == kChunk) {
         buffers.push_back(chunk_records(at, kRecordHead + len));
-        take(buffers.back().data(), buffers.back().size(), buffers.size() - 1, at);
+        take(at);
       } else if (head[0] == kSchema || head[0] == kChannel || head[0] == kMessage) {
         buffers.push_back(bytes_at(at, kRecordHead + len, "a record"));
-        take(buffers.back().data(), buffers.back().size(), buffers.size() - 1, at);
+        take(at);
       }
       at += kRecordHead + len;
     }
   } catch (const std::length_error& e) {
     corrupt(e.what());
-  } catch (const std::logic_error& e) {
-    corrupt(std::string("a chunk inside a chunk at byte ") + e.what());
   }
   std::stable_sort(held.begin(), held.end(),
                    [](const Held& a, const Held& b) { return a.m.log_time < b.m.log_time; });
@@ -477,27 +487,14 @@ void Reader::read_indexed(const std::function<bool(std::uint16_t)>& wanted,
       std::size_t count = 0;
       const std::size_t slot = next;
       try {
-        each_record(records.data(), records.size(), [&](std::uint8_t op, Fields f, std::size_t at) {
-          if (op == kSchema) {
-            Schema s = parse_schema(f);
-            schemas_.emplace(s.id, std::move(s));
-          } else if (op == kChannel) {
-            Channel c = parse_channel(f);
-            channels_.emplace(c.id, std::move(c));
-          } else if (op == kMessage) {
-            MessageView m = parse_message(f);
-            if (channels_.count(m.channel_id) == 0) {
-              throw std::length_error("a message on channel " + std::to_string(m.channel_id) +
-                                      ", which the file does not define");
-            }
-            if (!wanted(m.channel_id)) return;
-            pending.push({m.log_time, slot, at, m});
-            ++count;
-          }
-        });
+        take_records(records.data(), records.size(), order[next].offset,
+                     [&](const MessageView& m, std::size_t at) {
+                       if (!wanted(m.channel_id)) return;
+                       pending.push({m.log_time, slot, at, m});
+                       ++count;
+                     });
       } catch (const std::length_error& e) {
-        corrupt(e.what() + std::string(" (chunk at byte ") + std::to_string(order[next].offset) +
-                ")");
+        corrupt(e.what());
       }
       // The views point into the buffer: move it into place without reallocating its data.
       if (count > 0) loaded.emplace(slot, std::make_pair(std::move(records), count));

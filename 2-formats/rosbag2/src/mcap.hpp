@@ -74,6 +74,11 @@ class Reader {
   void read_summary(std::uint64_t summary_start, std::uint64_t footer_at);
   void scan_data_section();
   std::vector<std::uint8_t> chunk_records(std::uint64_t offset, std::uint64_t length);
+  /// The records of a chunk, or one record of the data section, found at byte @p base: schemas
+  /// and channels are kept; each message on a channel defined before it goes to @p on_message
+  /// with its offset in @p p. @throws std::length_error naming what is wrong and @p base
+  void take_records(const std::uint8_t* p, std::size_t n, std::uint64_t base,
+                    const std::function<void(const MessageView&, std::size_t)>& on_message);
   void read_indexed(const std::function<bool(std::uint16_t)>& wanted,
                     const std::function<void(const MessageView&)>& visit);
   void read_linear(const std::function<bool(std::uint16_t)>& wanted,

@@ -197,25 +197,18 @@ FilterJobStats run_recording(const FilterJobOptions& o, const Progress& progress
   ScanFilter filter(o, stats);
   const std::unique_ptr<io::RecordingWriter> out =
       create_recording(o.output, o.compression, o.format);
-  std::int64_t all_messages = 0;
-  for (const auto& [name, info] : topics.all()) all_messages += info.messages;
   as_job([&] {
-    in->read({}, [&](const io::RecordedMessage& m) {
-      check_cancelled(cancel);
-      copy_or_leave_out(*out, m, stats.left_out);
-      ++stats.messages_in;
-      if (progress && stats.messages_in % 256 == 0) {
-        progress(static_cast<double>(stats.messages_in) /
-                 static_cast<double>(std::max<std::int64_t>(1, all_messages)));
-      }
-      if (m.topic() != o.scan_topic) return;
-      const std::optional<io::ScanMessage> scan = m.scan();
-      if (!scan) return;
-      PoseLookup why = PoseLookup::kOk;
-      const std::optional<Pose2> pose = motion.sensor_pose(scan->scan.stamp_s, &why);
-      const FilterResult& result = filter.process(scan->scan, scan->scan_time, pose, why);
-      write_outputs(*out, o.scan_topic, m.time(), *scan, result);
-    });
+    copy_recording(*in, *out, stats.left_out, stats.messages_in, cancel, progress,
+                   [&](const io::RecordedMessage& m) {
+                     if (m.topic() != o.scan_topic) return;
+                     const std::optional<io::ScanMessage> scan = m.scan();
+                     if (!scan) return;
+                     PoseLookup why = PoseLookup::kOk;
+                     const std::optional<Pose2> pose = motion.sensor_pose(scan->scan.stamp_s, &why);
+                     const FilterResult& result =
+                         filter.process(scan->scan, scan->scan_time, pose, why);
+                     write_outputs(*out, o.scan_topic, m.time(), *scan, result);
+                   });
     out->finish();
   });
   filter.finish();

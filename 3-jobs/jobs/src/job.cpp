@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -262,6 +263,24 @@ void copy_or_leave_out(io::RecordingWriter& out, const io::RecordedMessage& mess
   } else {
     ++left_out[message.topic()];
   }
+}
+
+void copy_recording(io::RecordingReader& in, io::RecordingWriter& out,
+                    std::map<std::string, std::int64_t>& left_out, std::int64_t& messages_in,
+                    const std::atomic<bool>* cancel, const Progress& progress,
+                    const std::function<void(const io::RecordedMessage&)>& each) {
+  std::int64_t all_messages = 0;
+  for (const auto& [name, info] : in.topics().all()) all_messages += info.messages;
+  in.read({}, [&](const io::RecordedMessage& m) {
+    check_cancelled(cancel);
+    copy_or_leave_out(out, m, left_out);
+    ++messages_in;
+    if (progress && messages_in % 256 == 0) {
+      progress(static_cast<double>(messages_in) /
+               static_cast<double>(std::max<std::int64_t>(1, all_messages)));
+    }
+    if (each) each(m);
+  });
 }
 
 std::string left_out_summary(const std::map<std::string, std::int64_t>& left_out) {

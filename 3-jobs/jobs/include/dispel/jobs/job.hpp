@@ -88,6 +88,13 @@ std::unique_ptr<io::RecordingWriter> create_recording(
 /// topic in @p left_out: a message of a type that cannot be converted between formats.
 void copy_or_leave_out(io::RecordingWriter& out, const io::RecordedMessage& message,
                        std::map<std::string, std::int64_t>& left_out);
+/// Reads every message of @p in, in time order, and copies it to @p out (copy_or_leave_out),
+/// then gives it to @p each when there is one; counts into @p messages_in, reports @p progress
+/// every 256 messages, stops with JobCancelled when @p cancel is set. Does not finish @p out.
+void copy_recording(io::RecordingReader& in, io::RecordingWriter& out,
+                    std::map<std::string, std::int64_t>& left_out, std::int64_t& messages_in,
+                    const std::atomic<bool>* cancel, const Progress& progress,
+                    const std::function<void(const io::RecordedMessage&)>& each = {});
 /// "N messages on /a, /b (types that cannot be converted between formats)", or "" for none.
 std::string left_out_summary(const std::map<std::string, std::int64_t>& left_out);
 

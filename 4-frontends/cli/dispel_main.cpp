@@ -76,12 +76,16 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))
       ->capture_default_str();
   std::string filter_format = "auto";
-  filter_cmd
-      ->add_option("--format", filter_format,
-                   "Output format: auto (by name: .bag ROS 1; .mcap, .db3 or a folder rosbag2), "
-                   "ros1, mcap or sqlite3")
-      ->check(CLI::IsMember({"auto", "ros1", "mcap", "sqlite3"}))
-      ->capture_default_str();
+  // filter and convert: the output's format, by its name or as asked.
+  const auto add_format_option = [](CLI::App* command, std::string& format) {
+    command
+        ->add_option("--format", format,
+                     "Output format: auto (by name: .bag ROS 1; .mcap, .db3 or a folder "
+                     "rosbag2), ros1, mcap or sqlite3")
+        ->check(CLI::IsMember({"auto", "ros1", "mcap", "sqlite3"}))
+        ->capture_default_str();
+  };
+  add_format_option(filter_cmd, filter_format);
 
   dispel::jobs::ConvertJobOptions convert;
   std::string convert_compression = "none";
@@ -101,12 +105,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))
       ->capture_default_str();
   std::string convert_format = "auto";
-  convert_cmd
-      ->add_option("--format", convert_format,
-                   "Output format: auto (by name: .bag ROS 1; .mcap, .db3 or a folder rosbag2), "
-                   "ros1, mcap or sqlite3")
-      ->check(CLI::IsMember({"auto", "ros1", "mcap", "sqlite3"}))
-      ->capture_default_str();
+  add_format_option(convert_cmd, convert_format);
 
   dispel::apps::SimOptions sim;
   CLI::App* sim_cmd =

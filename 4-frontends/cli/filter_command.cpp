@@ -124,32 +124,44 @@ class ProgressBar {
   int last_ = -1;
 };
 
-}  // namespace
-
-int run_filter(FilterCommandOptions options) {
-  options.job.compression = compression_named(options.compression);
-  std::optional<Interrupts> interrupts(std::in_place);
+// Runs @p job (given the progress callback and the Ctrl-C flag) with a bar on a terminal; an
+// error or an interruption is printed as "dispel <command>: ...". Returns the exit code: 0 when
+// the job ran, 1 on an error, 130 when interrupted (nothing written at @p output then).
+template <typename Job>
+int run_with_progress(const char* command, const std::string& output, Job&& job) {
+  const Interrupts interrupts;
   ProgressBar bar;
   jobs::Progress progress;
   if (::isatty(STDERR_FILENO) != 0) progress = [&bar](double f) { bar(f); };
-
-  jobs::FilterJobStats stats;
   try {
-    stats = jobs::run_filter_job(
-        options.job, progress, interrupts->flag(),
-        [](const std::string& n) { std::cerr << "dispel filter: " << error_line(n) << "\n"; });
+    job(progress, interrupts.flag());
   } catch (const jobs::JobCancelled&) {
     bar.finish();
-    std::cerr << "dispel filter: interrupted; " << error_line(options.job.output)
+    std::cerr << "dispel " << command << ": interrupted; " << error_line(output)
               << " was not written\n";
     return 130;
   } catch (const std::exception& e) {
     bar.finish();
-    std::cerr << "dispel filter: " << error_line(e.what()) << "\n";
+    std::cerr << "dispel " << command << ": " << error_line(e.what()) << "\n";
     return 1;
   }
   bar.finish();
-  interrupts.reset();
+  return 0;
+}
+
+}  // namespace
+
+int run_filter(FilterCommandOptions options) {
+  options.job.compression = compression_named(options.compression);
+  jobs::FilterJobStats stats;
+  const int code = run_with_progress(
+      "filter", options.job.output,
+      [&](const jobs::Progress& progress, const std::atomic<bool>* cancel) {
+        stats = jobs::run_filter_job(options.job, progress, cancel, [](const std::string& n) {
+          std::cerr << "dispel filter: " << error_line(n) << "\n";
+        });
+      });
+  if (code != 0) return code;
 
   std::int64_t skipped = 0;
   for (const auto& [reason, n] : stats.scans_skipped) skipped += n;
@@ -193,24 +205,13 @@ jobs::Compression compression_named(const std::string& name) {
 }
 
 int run_convert(const jobs::ConvertJobOptions& options) {
-  std::optional<Interrupts> interrupts(std::in_place);
-  ProgressBar bar;
-  jobs::Progress progress;
-  if (::isatty(STDERR_FILENO) != 0) progress = [&bar](double f) { bar(f); };
   jobs::ConvertJobStats stats;
-  try {
-    stats = jobs::run_convert_job(options, progress, interrupts->flag());
-  } catch (const jobs::JobCancelled&) {
-    bar.finish();
-    std::cerr << "dispel convert: interrupted; " << error_line(options.output)
-              << " was not written\n";
-    return 130;
-  } catch (const std::exception& e) {
-    bar.finish();
-    std::cerr << "dispel convert: " << error_line(e.what()) << "\n";
-    return 1;
-  }
-  bar.finish();
+  const int code =
+      run_with_progress("convert", options.output,
+                        [&](const jobs::Progress& progress, const std::atomic<bool>* cancel) {
+                          stats = jobs::run_convert_job(options, progress, cancel);
+                        });
+  if (code != 0) return code;
   std::printf("dispel convert: %lld messages of a %s recording\nwrote %s: %lld messages\n",
               static_cast<long long>(stats.messages_in), stats.input_format.c_str(),
               options.output.c_str(), static_cast<long long>(stats.messages_out));

@@ -34,6 +34,13 @@ enum Op : std::uint8_t {
 constexpr std::size_t kRecordHead = 9;   // opcode, uint64 length
 constexpr std::size_t kFooterBody = 20;  // summary_start, summary_offset_start, summary_crc
 
+// A little-endian uint64 at @p p (a record's length, after its opcode).
+std::uint64_t u64_at(const std::uint8_t* p) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v |= static_cast<std::uint64_t>(p[i]) << (8 * i);
+  return v;
+}
+
 std::uint32_t crc32_of(std::uint32_t crc, const std::uint8_t* p, std::size_t n) {
   while (n > 0) {
     const uInt step = static_cast<uInt>(std::min<std::size_t>(n, 1U << 30));
@@ -104,8 +111,7 @@ void each_record(const std::uint8_t* p, std::size_t n, Fn&& fn) {
   while (at < n) {
     if (n - at < kRecordHead) throw std::length_error("a record header is cut short");
     const std::uint8_t op = p[at];
-    std::uint64_t len = 0;
-    for (int i = 0; i < 8; ++i) len |= static_cast<std::uint64_t>(p[at + 1 + i]) << (8 * i);
+    const std::uint64_t len = u64_at(p + at + 1);
     if (len > n - at - kRecordHead) throw std::length_error("a record runs past its end");
     fn(op, Fields(p + at + kRecordHead, static_cast<std::size_t>(len)), at);
     at += kRecordHead + static_cast<std::size_t>(len);
@@ -178,8 +184,7 @@ Reader::Reader(std::string path) : path_(std::move(path)) {
   const std::uint64_t footer_at = size_ - 8 - kRecordHead - kFooterBody;
   const std::vector<std::uint8_t> footer =
       bytes_at(footer_at, kRecordHead + kFooterBody, "the footer");
-  std::uint64_t footer_len = 0;
-  for (int i = 0; i < 8; ++i) footer_len |= static_cast<std::uint64_t>(footer[1 + i]) << (8 * i);
+  const std::uint64_t footer_len = u64_at(footer.data() + 1);
   if (footer[0] != kFooter || footer_len != kFooterBody)
     corrupt("no footer record before the closing magic");
   Fields ff(footer.data() + kRecordHead, kFooterBody);
@@ -189,9 +194,8 @@ Reader::Reader(std::string path) : path_(std::move(path)) {
 
   // The header record, right after the magic.
   const std::vector<std::uint8_t> head = bytes_at(8, kRecordHead, "the header record");
-  std::uint64_t head_len = 0;
-  for (int i = 0; i < 8; ++i) head_len |= static_cast<std::uint64_t>(head[1 + i]) << (8 * i);
-  if (head[0] != kHeader || head_len > footer_at - 8 - kRecordHead)
+  const std::uint64_t head_len = u64_at(head.data() + 1);
+  if (head[0] != kHeader || footer_at < 8 + kRecordHead || head_len > footer_at - 8 - kRecordHead)
     corrupt("no header record after the magic");
   try {
     const std::vector<std::uint8_t> body = bytes_at(8 + kRecordHead, head_len, "the header record");
@@ -289,8 +293,16 @@ void Reader::read_summary(std::uint64_t summary_start, std::uint64_t footer_at) 
   } catch (const std::length_error& e) {
     corrupt(std::string("in the summary: ") + e.what());
   }
+  // One index per chunk: a chunk indexed twice is read once.
+  std::sort(chunks_.begin(), chunks_.end(),
+            [](const ChunkIndex& a, const ChunkIndex& b) { return a.offset < b.offset; });
+  chunks_.erase(
+      std::unique(chunks_.begin(), chunks_.end(),
+                  [](const ChunkIndex& a, const ChunkIndex& b) { return a.offset == b.offset; }),
+      chunks_.end());
   // Indexed reading needs the statistics (the counts) and a chunk index for every chunk; a file
-  // with messages outside chunks, or without statistics, is read from its data section.
+  // without statistics is read from its data section (as is one whose messages are outside
+  // chunks but whose summary has no chunk index).
   indexed_ = have_statistics && (!chunks_.empty() || start_time_ == 0);
   std::uint64_t total = 0;
   for (const auto& [id, n] : counts_) total += n;
@@ -328,11 +340,23 @@ std::vector<std::uint8_t> Reader::chunk_records(std::uint64_t offset, std::uint6
     corrupt(e.what() + at);
   }
   // A chunk never holds more than 1 GiB here: a larger size is a corrupt field, not a chunk.
-  if (uncompressed_size > (1ULL << 30))
+  if (uncompressed_size > (1ULL << 30)) {
     corrupt("a chunk of " + std::to_string(uncompressed_size) + " bytes" + at);
+  }
+  // The size a chunk claims is checked against what its data can hold before anything is
+  // allocated: a few bytes must not buy a gigabyte.
+  if (compression.empty() && data_size != uncompressed_size) {
+    corrupt("an uncompressed chunk's sizes differ" + at);
+  }
+  if (compression == "zstd" &&
+      ZSTD_getFrameContentSize(data, static_cast<std::size_t>(data_size)) != uncompressed_size) {
+    corrupt("a zstd chunk's frame does not hold the size the chunk states" + at);
+  }
+  if (compression == "lz4" && uncompressed_size > 255 * data_size + 64) {  // LZ4's best ratio.
+    corrupt("an lz4 chunk states more than its data can hold" + at);
+  }
   std::vector<std::uint8_t> out(static_cast<std::size_t>(uncompressed_size));
   if (compression.empty()) {
-    if (data_size != uncompressed_size) corrupt("an uncompressed chunk's sizes differ" + at);
     std::copy(data, data + data_size, out.begin());
   } else if (compression == "zstd") {
     const std::size_t n =
@@ -374,12 +398,13 @@ std::vector<std::uint8_t> Reader::chunk_records(std::uint64_t offset, std::uint6
 }
 
 void Reader::scan_data_section() {
-  // No usable index: walk the data section once for the schemas, channels, counts and times.
+  // No usable index: walk the data section once for the schemas, channels, counts and times
+  // (holding no message).
   counts_.clear();
   start_time_ = 0;
   end_time_ = 0;
   bool first = true;
-  read_linear([](std::uint16_t) { return true; },
+  read_linear([](std::uint16_t) { return false; }, {},
               [&](const MessageView& m) {
                 ++counts_[m.channel_id];
                 if (first || m.log_time < start_time_) start_time_ = m.log_time;
@@ -416,7 +441,8 @@ void Reader::take_records(const std::uint8_t* p, std::size_t n, std::uint64_t ba
 }
 
 void Reader::read_linear(const std::function<bool(std::uint16_t)>& wanted,
-                         const std::function<void(const MessageView&)>& visit) {
+                         const std::function<void(const MessageView&)>& visit,
+                         const std::function<void(const MessageView&)>& observe) {
   // Messages outside an index are collected, sorted by time (stable) and given in order.
   struct Held {
     MessageView m;
@@ -424,21 +450,28 @@ void Reader::read_linear(const std::function<bool(std::uint16_t)>& wanted,
   };
   std::vector<std::vector<std::uint8_t>> buffers;
   std::vector<Held> held;
+  // A buffer is kept only while it holds a message wanted.
   const auto take = [&](std::uint64_t base) {
     const std::size_t buffer = buffers.size() - 1;
+    bool keep = false;
     take_records(buffers.back().data(), buffers.back().size(), base,
                  [&](const MessageView& m, std::size_t) {
-                   if (wanted(m.channel_id)) held.push_back({m, buffer});
+                   if (observe) observe(m);
+                   if (!wanted(m.channel_id)) return;
+                   held.push_back({m, buffer});
+                   keep = true;
                  });
+    if (!keep) buffers.back() = {};
   };
   std::uint64_t at = 8;
   buffers.reserve(64);
   try {
     while (at < data_end_) {
       const std::vector<std::uint8_t> head = bytes_at(at, kRecordHead, "a record header");
-      std::uint64_t len = 0;
-      for (int i = 0; i < 8; ++i) len |= static_cast<std::uint64_t>(head[1 + i]) << (8 * i);
-      if (len > data_end_ - at - kRecordHead) {
+      const std::uint64_t len = u64_at(head.data() + 1);
+      // Checked so that nothing wraps: a record head cut by the end of the data section, or a
+      // length of nearly 2^64, would otherwise loop for ever.
+      if (data_end_ - at < kRecordHead || len > data_end_ - at - kRecordHead) {
         throw std::length_error("a record at byte " + std::to_string(at) +
                                 " runs past the data section");
       }
@@ -468,13 +501,14 @@ void Reader::read_indexed(const std::function<bool(std::uint16_t)>& wanted,
   });
   struct Pending {
     std::uint64_t time;
-    std::size_t chunk;  // Order of loading, then position: equal times keep file order.
+    std::uint64_t offset;  // The chunk's, then the position in it: equal times in file order.
     std::size_t at;
+    std::size_t chunk;  // Order of loading: the buffer it points into.
     MessageView m;
   };
   const auto later = [](const Pending& a, const Pending& b) {
     return a.time > b.time ||
-           (a.time == b.time && (a.chunk > b.chunk || (a.chunk == b.chunk && a.at > b.at)));
+           (a.time == b.time && (a.offset > b.offset || (a.offset == b.offset && a.at > b.at)));
   };
   std::priority_queue<Pending, std::vector<Pending>, decltype(later)> pending(later);
   std::map<std::size_t, std::pair<std::vector<std::uint8_t>, std::size_t>> loaded;  // buffer, left
@@ -490,7 +524,7 @@ void Reader::read_indexed(const std::function<bool(std::uint16_t)>& wanted,
         take_records(records.data(), records.size(), order[next].offset,
                      [&](const MessageView& m, std::size_t at) {
                        if (!wanted(m.channel_id)) return;
-                       pending.push({m.log_time, slot, at, m});
+                       pending.push({m.log_time, order[next].offset, at, slot, m});
                        ++count;
                      });
       } catch (const std::length_error& e) {

@@ -81,8 +81,11 @@ class Reader {
                     const std::function<void(const MessageView&, std::size_t)>& on_message);
   void read_indexed(const std::function<bool(std::uint16_t)>& wanted,
                     const std::function<void(const MessageView&)>& visit);
+  /// Reads the data section in file order, then gives the wanted messages in time order; each
+  /// message, wanted or not, goes to @p observe first when there is one.
   void read_linear(const std::function<bool(std::uint16_t)>& wanted,
-                   const std::function<void(const MessageView&)>& visit);
+                   const std::function<void(const MessageView&)>& visit,
+                   const std::function<void(const MessageView&)>& observe = {});
   std::vector<std::uint8_t> bytes_at(std::uint64_t offset, std::uint64_t size, const char* what);
   [[noreturn]] void corrupt(const std::string& what) const;
 

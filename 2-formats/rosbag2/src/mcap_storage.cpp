@@ -42,10 +42,16 @@ class McapReader final : public StorageReader {
   void read(const std::function<bool(std::size_t)>& wanted,
             const std::function<void(std::size_t, std::uint64_t, const std::uint8_t*, std::size_t)>&
                 visit) override {
-    file_.read([&](std::uint16_t id) { return wanted(index_.at(id)); },
-               [&](const mcap::MessageView& m) {
-                 visit(index_.at(m.channel_id), m.log_time, m.data, m.size);
-               });
+    // A channel the summary did not list (defined only inside a chunk) has no topic here: its
+    // messages are not given.
+    file_.read(
+        [&](std::uint16_t id) {
+          const auto it = index_.find(id);
+          return it != index_.end() && wanted(it->second);
+        },
+        [&](const mcap::MessageView& m) {
+          visit(index_.at(m.channel_id), m.log_time, m.data, m.size);
+        });
   }
 
  private:

@@ -3,6 +3,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -382,22 +385,34 @@ Rosbag2Writer::Rosbag2Writer(const std::string& path, Rosbag2Compression compres
     if (fs::exists(path, ec)) {
       failed("it exists already; a bag folder is never replaced: remove it or name another");
     }
-    w.temp_folder = (fs::path(path).lexically_normal().string());
-    while (!w.temp_folder.empty() && w.temp_folder.back() == '/') w.temp_folder.pop_back();
-    w.temp_folder += ".partial";
-    fs::remove_all(w.temp_folder, ec);
-    if (!fs::create_directory(w.temp_folder, ec)) failed(ec.message());
+    // A folder of this run's own (OUT.partial.XXXXXX): nothing of anyone else's is ever
+    // removed, and two runs writing one OUT do not meet until the rename.
+    std::string pattern = fs::path(path).lexically_normal().string();
+    while (!pattern.empty() && pattern.back() == '/') pattern.pop_back();
+    pattern += ".partial.XXXXXX";
+    if (::mkdtemp(pattern.data()) == nullptr) failed(std::strerror(errno));
+    w.temp_folder = pattern;
+    fs::permissions(w.temp_folder,  // mkdtemp makes it 0700; a bag folder is 0755.
+                    fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                        fs::perms::others_read | fs::perms::others_exec,
+                    ec);
     w.file_name = name + (w.sqlite3 ? "_0.db3" : "_0.mcap");
     file = (fs::path(w.temp_folder) / w.file_name).string();
   }
-  if (w.sqlite3) {
-    w.storage = rosbag2::create_sqlite3(file, path);
-  } else {
-    w.storage =
-        rosbag2::create_mcap(file, path,
-                             compression == Rosbag2Compression::kZstd  ? mcap::Compression::kZstd
-                             : compression == Rosbag2Compression::kLz4 ? mcap::Compression::kLz4
-                                                                       : mcap::Compression::kNone);
+  try {
+    if (w.sqlite3) {
+      w.storage = rosbag2::create_sqlite3(file, path);
+    } else {
+      w.storage = rosbag2::create_mcap(
+          file, path,
+          compression == Rosbag2Compression::kZstd  ? mcap::Compression::kZstd
+          : compression == Rosbag2Compression::kLz4 ? mcap::Compression::kLz4
+                                                    : mcap::Compression::kNone);
+    }
+  } catch (...) {  // The destructor does not run for a constructor that throws.
+    std::error_code ec;
+    if (w.folder) fs::remove_all(w.temp_folder, ec);
+    throw;
   }
 }
 

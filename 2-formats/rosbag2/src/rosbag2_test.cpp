@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -32,6 +33,16 @@ class Rosbag2 : public ::testing::Test {
   std::string at(const std::string& name) const { return (dir_ / name).string(); }
   fs::path dir_;
 };
+
+// How many entries of the folder of @p prefix have names that begin as it does.
+int entries_starting(const std::string& prefix) {
+  const fs::path p(prefix);
+  int n = 0;
+  for (const auto& e : fs::directory_iterator(p.parent_path())) {
+    if (e.path().filename().string().rfind(p.filename().string(), 0) == 0) ++n;
+  }
+  return n;
+}
 
 ScanMessage scan_at(int i) {
   ScanMessage m;
@@ -92,7 +103,7 @@ TEST_F(Rosbag2, WhatIsWrittenIsReadBackInEveryCompressionAndLayout) {
       write_recording(w);
       EXPECT_EQ(w.messages_written(), 601);
     }
-    EXPECT_FALSE(fs::exists(at(name) + ".partial"));
+    EXPECT_EQ(entries_starting(at(name) + ".partial"), 0);
     Rosbag2Reader r(at(name));
     const bool db3 = name == "plain.db3" || name == "sqlite_folder";
     EXPECT_EQ(r.format_name(), db3 ? "rosbag2 (sqlite3)" : "rosbag2 (mcap)");
@@ -229,7 +240,7 @@ TEST_F(Rosbag2, AFolderThatExistsIsNeverReplacedAndAnUnfinishedOneLeavesNothing)
     w.write("/scan", {1, 0}, scan_at(0));
   }
   EXPECT_FALSE(fs::exists(at("unfinished")));
-  EXPECT_FALSE(fs::exists(at("unfinished.partial")));
+  EXPECT_EQ(entries_starting(at("unfinished.partial")), 0);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -622,6 +633,57 @@ TEST_F(Rosbag2, ARefusedFileLeavesNoDescriptorOpen) {
     EXPECT_FALSE(error_of(at("missing.mcap")).empty());
   }
   EXPECT_EQ(open_files(), before);
+}
+
+}  // namespace
+}  // namespace dispel::io
+
+namespace dispel::io {
+namespace {
+
+// From the review of the first version: a writer never removes what it did not make, and a
+// file that states sizes it cannot hold is refused before anything is allocated or looped over.
+TEST_F(Rosbag2, AWriterRemovesNothingItDidNotMake) {
+  fs::create_directories(at("keep.partial/notes"));
+  put(at("keep.partial/notes/a.txt"), {'a'});
+  {
+    Rosbag2Writer w(at("keep"), Rosbag2Compression::kNone);
+    write_recording(w);
+  }
+  EXPECT_TRUE(fs::exists(at("keep.partial/notes/a.txt")));
+  EXPECT_TRUE(fs::exists(at("keep/metadata.yaml")));
+  EXPECT_EQ(fs::status(at("keep")).permissions() & fs::perms::others_read, fs::perms::others_read);
+}
+
+TEST_F(Rosbag2, SizesAFileCannotHoldAreRefusedAtOnce) {
+  {
+    Rosbag2Writer w(at("small.mcap"), Rosbag2Compression::kZstd);
+    write_recording(w);
+  }
+  // 84 bytes (from the review): magic, header, then 8 bytes before the summary that start a
+  // record of 2^64 - 9 bytes; a summary without statistics, so the data section is walked.
+  // Before the fix the walk wrapped around and never ended.
+  std::string f("\x89MCAP0\r\n", 8);
+  const auto u32 = [&](std::uint32_t v) { f.append(reinterpret_cast<const char*>(&v), 4); };
+  const auto u64 = [&](std::uint64_t v) { f.append(reinterpret_cast<const char*>(&v), 8); };
+  f += '\x01';
+  u64(4 + 4 + 4 + 1);
+  u32(4);
+  f += "ros2";
+  u32(1);
+  f += 'x';
+  f += std::string("\x07\xf7\xff\xff\xff\xff\xff\xff", 8);
+  const std::uint64_t summary_start = f.size();
+  f += std::string("\xff\0\0\0\0\0\0\0\0", 9);
+  f += '\x02';
+  u64(20);
+  u64(summary_start);
+  u64(0);
+  u32(0);
+  f += std::string("\x89MCAP0\r\n", 8);
+  put(at("loop.mcap"), std::vector<char>(f.begin(), f.end()));
+  EXPECT_NE(error_of(at("loop.mcap")).find("corrupt MCAP file"), std::string::npos)
+      << error_of(at("loop.mcap"));
 }
 
 }  // namespace

@@ -132,14 +132,20 @@ TEST(ConvertJob, Sqlite3ByNameOrAskedForAndANameThatSaysOtherwiseIsRefused) {
             std::string::npos);
   EXPECT_NE(error_of({in, temp_path("y.db3"), Compression::kLz4}).find("not compressed"),
             std::string::npos);
-  // --format ros1 whatever the name.
-  const std::string ros1 = temp_path("really_ros1.mcap");
-  fs::remove(ros1);
+  // --format ros1 for a name without extension; refused for a rosbag2 name, and rosbag2 for .bag.
+  const std::string ros1 = temp_path("really_ros1");
+  fs::remove_all(ros1);
   run_convert_job({db3, ros1, Compression::kNone, RecordingFormat::kRos1});
   std::ifstream f(ros1, std::ios::binary);
   std::string first_line;
   std::getline(f, first_line);
   EXPECT_EQ(first_line, "#ROSBAG V2.0");
+  EXPECT_NE(error_of({db3, temp_path("z.mcap"), Compression::kNone, RecordingFormat::kRos1})
+                .find("the name says rosbag2"),
+            std::string::npos);
+  EXPECT_NE(error_of({db3, temp_path("z.bag"), Compression::kNone, RecordingFormat::kMcap})
+                .find("the name says a ROS 1 bag"),
+            std::string::npos);
 }
 
 TEST(ConvertJob, ABagFolderIsAnInputWhereOtherFoldersAreNot) {
@@ -150,6 +156,16 @@ TEST(ConvertJob, ABagFolderIsAnInputWhereOtherFoldersAreNot) {
   EXPECT_NO_THROW(check_files({{"", folder}}, {{"-o", temp_path("y.bag")}}));
   EXPECT_NO_THROW(check_input_file(folder));
   EXPECT_EQ(scans_of(folder).size(), 20U);
+  const std::string m = [&] {
+    try {
+      check_files({{"", folder}}, {{"-o", folder + "/" + "convert_folder_0.mcap"}});
+    } catch (const JobError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  }();
+  EXPECT_NE(m.find("is inside the input bag folder"), std::string::npos) << m;
+  EXPECT_THROW(check_files({{"", folder}}, {{"--stats", folder + "/./metadata.yaml"}}), JobError);
   fs::remove(fs::path(folder) / "metadata.yaml");
   EXPECT_THROW(check_files({{"", folder}}, {{"-o", temp_path("y.bag")}}), JobError);
   EXPECT_THROW(check_input_file(folder), JobError);

@@ -162,6 +162,16 @@ void check_files(const std::vector<FileArgument>& inputs,
         throw JobError(named(*o) + " is the same file as the input " + named(*input) +
                        "; the input would be overwritten");
       }
+      // Nothing is written inside an input bag folder (its storage files, its metadata.yaml).
+      std::error_code ec;
+      const fs::path folder = fs::weakly_canonical(input->path, ec);
+      const fs::path written = fs::weakly_canonical(o->path, ec);
+      if (is_bag_folder(input->path) &&
+          std::mismatch(folder.begin(), folder.end(), written.begin(), written.end()).first ==
+              folder.end()) {
+        throw JobError(named(*o) + " is inside the input bag folder " + named(*input) +
+                       "; the input would be changed");
+      }
     }
     if (place.special) continue;
     for (std::size_t j = 0; j < i; ++j) {
@@ -217,6 +227,16 @@ std::unique_ptr<io::RecordingWriter> create_recording(const std::string& path,
     format = !writes_rosbag2(path)  ? RecordingFormat::kRos1
              : writes_sqlite3(path) ? RecordingFormat::kSqlite3
                                     : RecordingFormat::kMcap;
+  }
+  const bool rosbag2_name =
+      ends_with(path, ".mcap") || ends_with(path, ".db3") || path.back() == '/';
+  if (format == RecordingFormat::kRos1 && rosbag2_name) {
+    throw JobError(path + ": the name says rosbag2, the format asked ROS 1: name the output .bag");
+  }
+  if (format != RecordingFormat::kRos1 && ends_with(path, ".bag")) {
+    throw JobError(path +
+                   ": the name says a ROS 1 bag, the format asked rosbag2: name the output "
+                   ".mcap, .db3 or a folder");
   }
   if (format == RecordingFormat::kRos1) {
     if (compression == Compression::kZstd) {

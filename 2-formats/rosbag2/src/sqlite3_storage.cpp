@@ -64,10 +64,10 @@ class Database {
       fail(e != 0 ? std::strerror(e) : sqlite3_errstr(rc));
     }
     sqlite3_busy_timeout(db, 1000);  // A writer's transaction going on: wait for it a while.
-    // A file's schema is outside data: no value longer than 1 GiB (a generated column of
+    // A file's schema is outside data: no value longer than 256 MiB (a generated column of
     // zeroblob(900000000) is refused, not made), no functions with side effects in it, no
     // writes to the schema.
-    sqlite3_limit(db, SQLITE_LIMIT_LENGTH, 1 << 30);
+    sqlite3_limit(db, SQLITE_LIMIT_LENGTH, 256 << 20);
     sqlite3_db_config(db, SQLITE_DBCONFIG_TRUSTED_SCHEMA, 0, nullptr);
     sqlite3_db_config(db, SQLITE_DBCONFIG_DEFENSIVE, 1, nullptr);
   }

@@ -415,7 +415,6 @@ void Reader::scan_data_section() {
 
 void Reader::take_records(const std::uint8_t* p, std::size_t n, std::uint64_t base,
                           const std::function<void(const MessageView&, std::size_t)>& on_message) {
-  const std::string where = " (in the record or chunk at byte " + std::to_string(base) + ")";
   try {
     each_record(p, n, [&](std::uint8_t op, Fields f, std::size_t at) {
       if (op == kSchema) {
@@ -435,8 +434,9 @@ void Reader::take_records(const std::uint8_t* p, std::size_t n, std::uint64_t ba
         throw std::length_error("a chunk inside a chunk");
       }
     });
-  } catch (const std::length_error& e) {
-    throw std::length_error(e.what() + where);
+  } catch (const std::length_error& e) {  // The byte named only when there is an error.
+    throw std::length_error(e.what() + std::string(" (in the record or chunk at byte ") +
+                            std::to_string(base) + ")");
   }
 }
 

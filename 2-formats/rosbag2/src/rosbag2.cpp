@@ -22,9 +22,10 @@ namespace {
 namespace fs = std::filesystem;
 using rosbag2::StoredTopic;
 
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+// @p path without the slashes at its end ("out/" names the folder "out").
+std::string without_trailing_slashes(std::string path) {
+  while (path.size() > 1 && path.back() == '/') path.pop_back();
+  return path;
 }
 
 Stamp stamp_of(std::uint64_t ns) {
@@ -387,9 +388,8 @@ Rosbag2Writer::Rosbag2Writer(const std::string& path, Rosbag2Compression compres
     }
     // A folder of this run's own (OUT.partial.XXXXXX): nothing of anyone else's is ever
     // removed, and two runs writing one OUT do not meet until the rename.
-    std::string pattern = fs::path(path).lexically_normal().string();
-    while (!pattern.empty() && pattern.back() == '/') pattern.pop_back();
-    pattern += ".partial.XXXXXX";
+    std::string pattern =
+        without_trailing_slashes(fs::path(path).lexically_normal().string()) + ".partial.XXXXXX";
     if (::mkdtemp(pattern.data()) == nullptr) failed(std::strerror(errno));
     w.temp_folder = pattern;
     fs::permissions(w.temp_folder,  // mkdtemp makes it 0700; a bag folder is 0755.
@@ -476,9 +476,7 @@ void Rosbag2Writer::finish() {
   // The metadata last, then the folder into place.
   write_file_atomically((fs::path(w.temp_folder) / "metadata.yaml").string(), text);
   std::error_code ec;
-  std::string target = w.path;
-  while (target.size() > 1 && target.back() == '/') target.pop_back();
-  fs::rename(w.temp_folder, target, ec);
+  fs::rename(w.temp_folder, without_trailing_slashes(w.path), ec);
   if (ec)
     throw OutputError(w.path + ": cannot move the bag folder into place (" + ec.message() + ")");
   w.finished = true;

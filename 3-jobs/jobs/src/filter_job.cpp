@@ -8,15 +8,13 @@
 #include "dispel/io/carmen.hpp"
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/recording_motion.hpp"
+#include "dispel/io/text.hpp"
 #include "dispel/pipeline/scan_filter_runner.hpp"
 
 namespace dispel::jobs {
 namespace {
 
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
+using io::ends_with;
 
 DynamicFilterConfig base_config(const FilterJobOptions& o) {
   if (o.config) return *o.config;

@@ -185,10 +185,7 @@ void check_files(const std::vector<FileArgument>& inputs,
 
 namespace {
 
-bool ends_with(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
+using io::ends_with;
 
 }  // namespace
 

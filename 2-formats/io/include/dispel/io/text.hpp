@@ -9,6 +9,12 @@
 
 namespace dispel::io {
 
+/// True when @p text ends in @p suffix (a file name's extension, say), as written.
+inline bool ends_with(std::string_view text, std::string_view suffix) {
+  return text.size() >= suffix.size() &&
+         text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
 /// How many characters of an input quote() keeps by default.
 inline constexpr std::size_t kQuotedChars = 80;
 

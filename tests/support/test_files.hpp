@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 namespace dispel::test {
@@ -41,6 +42,14 @@ inline std::string write_text(const std::string& name, const std::string& text) 
   const std::string path = temp_path(name);
   std::ofstream(path, std::ios::binary) << text;
   return path;
+}
+
+/// The bytes of the file at @p path (empty when it cannot be read).
+inline std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
 }
 
 inline bool exists(const std::string& path) {

@@ -257,6 +257,41 @@ std::string oversized_matrix_error(const std::string& bytes) {
   return {};
 }
 
+// Whether MRPT reads a stored object of class @p name as a @p base: the class is registered, is
+// not abstract, and derives from @p base. Where MRPT reads a pointer to an object of a base class
+// into its deepcopy_poly_ptr (a CActionCollection's actions, a CActionRobotMovement2D's pose
+// change), it copies the object it read through the pointer without checking it: an abstract
+// class (MRPT makes no object, so a null pointer; the fuzzer stored a "CAction"), the stored null
+// pointer ("nullptr") and a class of another kind (its cast gives null) are a SIGSEGV.
+bool makes_a(const std::string& name, const mrpt::rtti::TRuntimeClassId* base) {
+  // MRPT takes the stored name as a C string: up to its first NUL.
+  const mrpt::rtti::TRuntimeClassId* id = mrpt::rtti::findRegisteredClass(name.c_str());
+  return id != nullptr && id->ptrCreateObject && id->derivedFrom(base);
+}
+
+// The first action of every stored CActionCollection (version 0: the number of actions, then
+// the actions), at any depth, that MRPT cannot read (makes_a). The actions of a top-level
+// collection are read one by one and all checked (read_actions); a collection inside a whole
+// CRawlog is read by MRPT, and its later actions stand where only reading the earlier ones tells.
+// The check's message, or empty.
+std::string action_class_error(const std::string& bytes) {
+  const std::string name = "CActionCollection";
+  for (std::size_t at = bytes.find(name); at != std::string::npos; at = bytes.find(name, at + 1)) {
+    const std::size_t start = object_start(bytes, at, name, "mrpt::obs::");
+    const std::size_t version_at = at + name.size();
+    if (start == std::string::npos || version_at + 5 > bytes.size() || bytes[version_at] != 0 ||
+        u32_at(bytes, version_at + 1) == 0) {
+      continue;
+    }
+    const auto [inner, inner_version_at] = object_header(bytes, version_at + 5);
+    if (inner.empty()) continue;  // Not an object's header: MRPT refuses it.
+    if (makes_a(inner, CLASS_ID(mrpt::obs::CAction))) continue;
+    return "a CActionCollection at byte " + std::to_string(start) + " whose first action is " +
+           quote(inner.c_str()) + ", not an action MRPT can make";
+  }
+  return {};
+}
+
 // A CActionRobotMovement2D (versions 4 to 7: the estimation method, then for odometry the raw
 // increment, a CPose2D, and the motion model's parameters; otherwise the pose change, a CPosePDF)
 // that MRPT cannot read safely:
@@ -279,10 +314,10 @@ std::string movement_error(const std::string& bytes) {
     const auto [inner, inner_version_at] = object_header(bytes, version_at + 5);
     if (inner.empty()) continue;  // MRPT refuses what follows.
     if (method != 0) {
-      if (inner.compare(0, 8, "CPosePDF") == 0) continue;
+      if (makes_a(inner, CLASS_ID(mrpt::poses::CPosePDF))) continue;
       return "a CActionRobotMovement2D at byte " + std::to_string(start) +
              " of estimation method " + std::to_string(method) + " whose pose change is " +
-             quote(inner) + ", not a CPosePDF";  // The name is the file's bytes: quoted.
+             quote(inner.c_str()) + ", not a CPosePDF MRPT can make";  // The file's bytes.
     }
     // Odometry: a CPose2D of version 1 (3 doubles, the end byte), then the model (4 bytes), 6
     // floats, the number of particles.
@@ -313,6 +348,8 @@ class Converter {
   void object(const mrpt::serialization::CSerializable::Ptr& obj) {
     if (auto actions = std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(obj)) {
       for (std::size_t i = 0; i < actions->size(); ++i) action(actions->get(i));
+    } else if (auto a = std::dynamic_pointer_cast<mrpt::obs::CAction>(obj)) {
+      action(a);  // Of a top-level collection read_actions read.
     } else if (auto frame = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj)) {
       sensory_frame(*frame);
     } else if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj)) {
@@ -464,7 +501,8 @@ MrptRawlogReader::MrptRawlogReader(const std::string& path) : impl_(std::make_un
   impl_->path = path;
   const std::string bytes = read_file(path);
   // What MRPT would crash on or grow without bound from, refused before it reads anything.
-  for (const std::string& error : {oversized_matrix_error(bytes), movement_error(bytes)}) {
+  for (const std::string& error :
+       {oversized_matrix_error(bytes), movement_error(bytes), action_class_error(bytes)}) {
     if (!error.empty()) throw InputError(path + ": not a readable MRPT rawlog (" + error + ")");
   }
   mrpt::io::CMemoryStream stream;
@@ -475,7 +513,6 @@ MrptRawlogReader::MrptRawlogReader(const std::string& path) : impl_(std::make_un
   // The log ends where the bytes end: an error reading an object that starts before is a
   // truncated or corrupt log.
   while (stream.getPosition() < bytes.size()) {
-    mrpt::serialization::CSerializable::Ptr obj;
     const std::string count_error =
         container_count_error(bytes, static_cast<std::size_t>(stream.getPosition()));
     if (!count_error.empty()) {
@@ -484,21 +521,50 @@ MrptRawlogReader::MrptRawlogReader(const std::string& path) : impl_(std::make_un
                                      : "corrupt after " + std::to_string(objects) + " objects: ") +
                        count_error + ")");
     }
-    try {
-      obj = archive.ReadObject();
-    } catch (const std::exception& e) {
-      throw InputError(
+    const auto corrupt = [&](const std::string& what) {
+      return InputError(
           path + ": not a readable MRPT rawlog (" +
           (objects == 0 ? std::string()
                         : "truncated or corrupt after " + std::to_string(objects) + " objects: ") +
-          one_line(e) + ")");
-    }
-    if (!obj) {
-      throw InputError(path + ": not a readable MRPT rawlog (a null object after " +
-                       std::to_string(objects) + " objects)");
+          what + ")");
+    };
+    std::vector<mrpt::serialization::CSerializable::Ptr> read;
+    try {
+      const auto [name, version_at] =
+          object_header(bytes, static_cast<std::size_t>(stream.getPosition()));
+      if (name == "CActionCollection" && bytes[version_at] == 0) {
+        // Read here, not by MRPT (makes_a): the number of actions (checked against the bytes
+        // left above), the actions, the byte that ends every object MRPT 2 stores.
+        stream.Seek(static_cast<std::uint64_t>(version_at) + 1);
+        std::uint32_t count = 0;
+        archive >> count;
+        for (std::uint32_t k = 0; k < count; ++k) {
+          read.push_back(archive.ReadObject());
+          if (!std::dynamic_pointer_cast<mrpt::obs::CAction>(read.back())) {
+            throw corrupt("action " + std::to_string(k) + " of a CActionCollection is " +
+                          (read.back() ? quote(read.back()->GetRuntimeClass()->className)
+                                       : std::string("null")) +
+                          ", not an action");
+          }
+        }
+        constexpr std::uint8_t kObjectEnd = 0x88;
+        std::uint8_t end = 0;
+        archive >> end;
+        if (end != kObjectEnd) throw corrupt("a CActionCollection goes on after its actions");
+      } else {
+        read.push_back(archive.ReadObject());
+        if (!read.back()) {
+          throw InputError(path + ": not a readable MRPT rawlog (a null object after " +
+                           std::to_string(objects) + " objects)");
+        }
+      }
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw corrupt(one_line(e));
     }
     ++objects;
-    converter.object(obj);
+    for (const auto& obj : read) converter.object(obj);
   }
   if (objects == 0) throw InputError(path + ": not a readable MRPT rawlog (the file is empty)");
   converter.finish();

@@ -13,8 +13,6 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <cmath>
-#include <fstream>
-#include <iterator>
 
 #include "dispel/io/errors.hpp"
 #include "dispel/io/mrpt_rawlog.hpp"
@@ -183,19 +181,12 @@ TEST(MrptRawlogSynthetic, ContainerCountCheckedUnderMrpt2sFullClassName) {
     frame.insert(laser("", kT0, true, 0.0));
     archive << frame;
   }
-  std::string bytes;
-  {
-    std::ifstream in(path, std::ios::binary);
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  }
+  std::string bytes = test::read_bytes(path);
   const std::string header = "\x98mrpt::obs::CSensoryFrame\x02";
   ASSERT_EQ(bytes.substr(0, header.size()), header);
   ASSERT_NO_THROW(MrptRawlogReader{path});
   bytes.replace(header.size(), 4, "\xff\xff\xff\xff");
-  {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out << bytes;
-  }
+  test::write_text("full_name.rawlog", bytes);
   try {
     MrptRawlogReader reader(path);
     FAIL() << "read";
@@ -206,6 +197,65 @@ TEST(MrptRawlogSynthetic, ContainerCountCheckedUnderMrpt2sFullClassName) {
                   "the " +
                   std::to_string(bytes.size() - header.size() - 4) + " bytes left)");
   }
+}
+
+// MRPT reads a CActionCollection's actions into pointers it copies through: an action it cannot
+// make (the fuzzer stored MRPT's abstract CAction: MRPT makes nothing and gets a null pointer) is
+// a SIGSEGV inside MRPT. A frame, then a collection of two odometry actions, read; then the
+// second action's class made "mrpt::obs::CAction" (NUL-padded to the same length: MRPT takes the
+// name as a C string) with no fields, then the first's.
+TEST(MrptRawlogSynthetic, ActionsMrptCannotMakeAreRefused) {
+  const std::string path = temp_path("abstract_action.rawlog");
+  {
+    mrpt::io::CFileOutputStream out(path);
+    auto archive = mrpt::serialization::archiveFrom(out);
+    mrpt::obs::CSensoryFrame frame;
+    frame.insert(laser("front", kT0, true, 0.3));
+    archive << frame;
+    mrpt::obs::CActionRobotMovement2D move;
+    move.computeFromOdometry(mrpt::poses::CPose2D(1.0, 0.0, 0.0),
+                             mrpt::obs::CActionRobotMovement2D::TMotionModelOptions{});
+    mrpt::obs::CActionCollection actions;
+    actions.insert(move);
+    actions.insert(move);
+    archive << actions;
+  }
+  const std::string bytes = test::read_bytes(path);
+  {
+    MrptRawlogReader reader(path);
+    std::vector<OdometryMessage> odometry;
+    read_all(reader, nullptr, &odometry);
+    ASSERT_EQ(odometry.size(), 3u);  // The identity at the scan, then one per action.
+    EXPECT_NEAR(odometry[1].pose.x_m, 1.0, 1e-9);
+    EXPECT_NEAR(odometry[2].pose.x_m, 2.0, 1e-9);
+  }
+  const std::string name = "mrpt::obs::CActionRobotMovement2D";
+  const std::size_t collection = bytes.find("mrpt::obs::CActionCollection") - 1;
+  const std::size_t first = bytes.find(name);
+  const std::size_t second = bytes.find(name, first + 1);
+  ASSERT_NE(second, std::string::npos);
+  const auto make_abstract = [&](std::string b, std::size_t at) {
+    b.replace(at, name.size(), std::string("mrpt::obs::CAction") + std::string(15, '\0'));
+    b[at + name.size() + 1] = '\x88';  // The end of the object, after its version.
+    return b;
+  };
+  const auto error = [&](const std::string& b) {
+    test::write_text("abstract_action.rawlog", b);
+    try {
+      MrptRawlogReader reader(path);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("read");
+  };
+  EXPECT_EQ(error(make_abstract(bytes, second)),
+            path +
+                ": not a readable MRPT rawlog (truncated or corrupt after 1 objects: action 1 of "
+                "a CActionCollection is null, not an action)");
+  EXPECT_EQ(error(make_abstract(bytes, first)),
+            path + ": not a readable MRPT rawlog (a CActionCollection at byte " +
+                std::to_string(collection) +
+                " whose first action is 'CAction', not an action MRPT can make)");
 }
 
 }  // namespace

@@ -288,7 +288,7 @@ TEST_F(MrptRawlogSena, MovementsMrptCannotReadAreRefusedBeforeMrptReadsThem) {
   EXPECT_EQ(open_error(write_text("method.rawlog", method)),
             temp_path("method.rawlog") +
                 ": not a readable MRPT rawlog (a CActionRobotMovement2D at byte 2072 of estimation "
-                "method 1 whose pose change is 'CPose2D', not a CPosePDF)");
+                "method 1 whose pose change is 'CPose2D', not a CPosePDF MRPT can make)");
   std::string thrun = bytes;
   thrun[2134] = '\x01';  // Thrun's model, with its 300 particles: read.
   EXPECT_EQ(open_error(write_text("thrun_300.rawlog", thrun)), "");

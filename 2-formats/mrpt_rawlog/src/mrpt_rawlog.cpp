@@ -261,35 +261,13 @@ std::string oversized_matrix_error(const std::string& bytes) {
 // not abstract, and derives from @p base. Where MRPT reads a pointer to an object of a base class
 // into its deepcopy_poly_ptr (a CActionCollection's actions, a CActionRobotMovement2D's pose
 // change), it copies the object it read through the pointer without checking it: an abstract
-// class (MRPT makes no object, so a null pointer; the fuzzer stored a "CAction"), the stored null
-// pointer ("nullptr") and a class of another kind (its cast gives null) are a SIGSEGV.
+// class (MRPT makes no object, so a null pointer; the fuzzer stored a "CAction" in a collection),
+// the stored null pointer ("nullptr") and a class of another kind (its cast gives null) are a
+// SIGSEGV. (The collections are read by ObjectReader, which checks the object MRPT made.)
 bool makes_a(const std::string& name, const mrpt::rtti::TRuntimeClassId* base) {
   // MRPT takes the stored name as a C string: up to its first NUL.
   const mrpt::rtti::TRuntimeClassId* id = mrpt::rtti::findRegisteredClass(name.c_str());
   return id != nullptr && id->ptrCreateObject && id->derivedFrom(base);
-}
-
-// The first action of every stored CActionCollection (version 0: the number of actions, then
-// the actions), at any depth, that MRPT cannot read (makes_a). The actions of a top-level
-// collection are read one by one and all checked (read_actions); a collection inside a whole
-// CRawlog is read by MRPT, and its later actions stand where only reading the earlier ones tells.
-// The check's message, or empty.
-std::string action_class_error(const std::string& bytes) {
-  const std::string name = "CActionCollection";
-  for (std::size_t at = bytes.find(name); at != std::string::npos; at = bytes.find(name, at + 1)) {
-    const std::size_t start = object_start(bytes, at, name, "mrpt::obs::");
-    const std::size_t version_at = at + name.size();
-    if (start == std::string::npos || version_at + 5 > bytes.size() || bytes[version_at] != 0 ||
-        u32_at(bytes, version_at + 1) == 0) {
-      continue;
-    }
-    const auto [inner, inner_version_at] = object_header(bytes, version_at + 5);
-    if (inner.empty()) continue;  // Not an object's header: MRPT refuses it.
-    if (makes_a(inner, CLASS_ID(mrpt::obs::CAction))) continue;
-    return "a CActionCollection at byte " + std::to_string(start) + " whose first action is " +
-           quote(inner.c_str()) + ", not an action MRPT can make";
-  }
-  return {};
 }
 
 // A CActionRobotMovement2D (versions 4 to 7: the estimation method, then for odometry the raw
@@ -335,6 +313,67 @@ std::string movement_error(const std::string& bytes) {
   return {};
 }
 
+// Reads a log's next object for the converter. MRPT reads each object, except the two
+// containers it reads through pointers it does not check or sizes from their counts:
+// - a CActionCollection (version 0: the number of actions, the actions): each action is read
+//   and checked here (makes_a), so that MRPT never copies through a null one;
+// - a whole CRawlog (version 0, or 1 with a CObservationComment after the entries): its entries
+//   are read as the log's own, so a collection or a count inside is checked as at the top
+//   level; at most kMaxLogDepth of them inside each other (each read is a call deeper).
+// Then the byte that ends every object MRPT 2 stores. Throws std::runtime_error with the message.
+constexpr int kMaxLogDepth = 8;
+struct ObjectReader {
+  const std::string& bytes;
+  mrpt::io::CMemoryStream& stream;
+  mrpt::serialization::CArchive& archive;
+
+  // Appends what the object holds for the converter to @p out: the object, or a collection's
+  // actions, or a CRawlog's entries.
+  void read(std::vector<mrpt::serialization::CSerializable::Ptr>& out, int depth) {
+    const auto pos = static_cast<std::size_t>(stream.getPosition());
+    if (depth > 0) {  // The top level's, with its own message, checked by the caller.
+      const std::string count_error = container_count_error(bytes, pos);
+      if (!count_error.empty()) throw std::runtime_error(count_error + " in a CRawlog");
+    }
+    const auto [name, version_at] = object_header(bytes, pos);
+    const int version = name.empty() ? -1 : static_cast<unsigned char>(bytes[version_at]);
+    const bool collection = name == "CActionCollection" && version == 0;
+    const bool log = name == "CRawlog" && (version == 0 || version == 1);
+    if (!collection && !log) {
+      out.push_back(archive.ReadObject());
+      if (!out.back()) throw std::runtime_error("a null object");
+      return;
+    }
+    if (log && depth == kMaxLogDepth) {
+      throw std::runtime_error("CRawlogs nested more than " + std::to_string(kMaxLogDepth) +
+                               " deep");
+    }
+    stream.Seek(static_cast<std::uint64_t>(version_at) + 1);
+    std::uint32_t count = 0;
+    archive >> count;
+    for (std::uint32_t k = 0; k < count; ++k) {
+      if (log) {
+        read(out, depth + 1);
+        continue;
+      }
+      // The stored class's name, for the message: MRPT makes nothing of an abstract one.
+      const std::string stored =
+          object_header(bytes, static_cast<std::size_t>(stream.getPosition())).first;
+      out.push_back(archive.ReadObject());
+      if (!std::dynamic_pointer_cast<mrpt::obs::CAction>(out.back())) {
+        throw std::runtime_error("action " + std::to_string(k) + " of a CActionCollection is " +
+                                 (stored.empty() ? std::string("null") : quote(stored.c_str())) +
+                                 ", not an action MRPT can make");
+      }
+    }
+    if (log && version == 1) archive.ReadObject();  // The log's comment: not converted.
+    constexpr std::uint8_t kObjectEnd = 0x88;
+    std::uint8_t end = 0;
+    archive >> end;
+    if (end != kObjectEnd) throw std::runtime_error("a " + name + " goes on after its entries");
+  }
+};
+
 constexpr const char* kOdomTopic = "/odom";
 constexpr const char* kMountTopic = "/tf_static";
 
@@ -349,13 +388,11 @@ class Converter {
     if (auto actions = std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(obj)) {
       for (std::size_t i = 0; i < actions->size(); ++i) action(actions->get(i));
     } else if (auto a = std::dynamic_pointer_cast<mrpt::obs::CAction>(obj)) {
-      action(a);  // Of a top-level collection read_actions read.
+      action(a);  // Of a collection ObjectReader read.
     } else if (auto frame = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj)) {
       sensory_frame(*frame);
     } else if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj)) {
       observation(o);
-    } else if (auto log = std::dynamic_pointer_cast<mrpt::obs::CRawlog>(obj)) {
-      for (std::size_t i = 0; i < log->size(); ++i) object(log->getAsGeneric(i));  // Saved whole.
     } else {
       skip(*obj);
     }
@@ -501,8 +538,7 @@ MrptRawlogReader::MrptRawlogReader(const std::string& path) : impl_(std::make_un
   impl_->path = path;
   const std::string bytes = read_file(path);
   // What MRPT would crash on or grow without bound from, refused before it reads anything.
-  for (const std::string& error :
-       {oversized_matrix_error(bytes), movement_error(bytes), action_class_error(bytes)}) {
+  for (const std::string& error : {oversized_matrix_error(bytes), movement_error(bytes)}) {
     if (!error.empty()) throw InputError(path + ": not a readable MRPT rawlog (" + error + ")");
   }
   mrpt::io::CMemoryStream stream;
@@ -521,47 +557,15 @@ MrptRawlogReader::MrptRawlogReader(const std::string& path) : impl_(std::make_un
                                      : "corrupt after " + std::to_string(objects) + " objects: ") +
                        count_error + ")");
     }
-    const auto corrupt = [&](const std::string& what) {
-      return InputError(
+    std::vector<mrpt::serialization::CSerializable::Ptr> read;
+    try {
+      ObjectReader{bytes, stream, archive}.read(read, 0);
+    } catch (const std::exception& e) {
+      throw InputError(
           path + ": not a readable MRPT rawlog (" +
           (objects == 0 ? std::string()
                         : "truncated or corrupt after " + std::to_string(objects) + " objects: ") +
-          what + ")");
-    };
-    std::vector<mrpt::serialization::CSerializable::Ptr> read;
-    try {
-      const auto [name, version_at] =
-          object_header(bytes, static_cast<std::size_t>(stream.getPosition()));
-      if (name == "CActionCollection" && bytes[version_at] == 0) {
-        // Read here, not by MRPT (makes_a): the number of actions (checked against the bytes
-        // left above), the actions, the byte that ends every object MRPT 2 stores.
-        stream.Seek(static_cast<std::uint64_t>(version_at) + 1);
-        std::uint32_t count = 0;
-        archive >> count;
-        for (std::uint32_t k = 0; k < count; ++k) {
-          read.push_back(archive.ReadObject());
-          if (!std::dynamic_pointer_cast<mrpt::obs::CAction>(read.back())) {
-            throw corrupt("action " + std::to_string(k) + " of a CActionCollection is " +
-                          (read.back() ? quote(read.back()->GetRuntimeClass()->className)
-                                       : std::string("null")) +
-                          ", not an action");
-          }
-        }
-        constexpr std::uint8_t kObjectEnd = 0x88;
-        std::uint8_t end = 0;
-        archive >> end;
-        if (end != kObjectEnd) throw corrupt("a CActionCollection goes on after its actions");
-      } else {
-        read.push_back(archive.ReadObject());
-        if (!read.back()) {
-          throw InputError(path + ": not a readable MRPT rawlog (a null object after " +
-                           std::to_string(objects) + " objects)");
-        }
-      }
-    } catch (const InputError&) {
-      throw;
-    } catch (const std::exception& e) {
-      throw corrupt(one_line(e));
+          one_line(e) + ")");
     }
     ++objects;
     for (const auto& obj : read) converter.object(obj);

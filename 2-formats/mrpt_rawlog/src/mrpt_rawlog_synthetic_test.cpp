@@ -9,6 +9,7 @@
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservationComment.h>
 #include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/obs/CRawlog.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 
@@ -230,7 +231,6 @@ TEST(MrptRawlogSynthetic, ActionsMrptCannotMakeAreRefused) {
     EXPECT_NEAR(odometry[2].pose.x_m, 2.0, 1e-9);
   }
   const std::string name = "mrpt::obs::CActionRobotMovement2D";
-  const std::size_t collection = bytes.find("mrpt::obs::CActionCollection") - 1;
   const std::size_t first = bytes.find(name);
   const std::size_t second = bytes.find(name, first + 1);
   ASSERT_NE(second, std::string::npos);
@@ -251,11 +251,72 @@ TEST(MrptRawlogSynthetic, ActionsMrptCannotMakeAreRefused) {
   EXPECT_EQ(error(make_abstract(bytes, second)),
             path +
                 ": not a readable MRPT rawlog (truncated or corrupt after 1 objects: action 1 of "
-                "a CActionCollection is null, not an action)");
+                "a CActionCollection is 'CAction', not an action MRPT can make)");
   EXPECT_EQ(error(make_abstract(bytes, first)),
-            path + ": not a readable MRPT rawlog (a CActionCollection at byte " +
-                std::to_string(collection) +
-                " whose first action is 'CAction', not an action MRPT can make)");
+            path +
+                ": not a readable MRPT rawlog (truncated or corrupt after 1 objects: action 0 of "
+                "a CActionCollection is 'CAction', not an action MRPT can make)");
+}
+
+// A whole CRawlog saved as one object: its entries are read as the log's own (the collection in
+// it checked as at the top level), CRawlogs inside each other too, at most 8 deep.
+TEST(MrptRawlogSynthetic, AWholeCRawlogIsReadAsTheLogsOwnEntries) {
+  mrpt::obs::CRawlog log;
+  mrpt::obs::CSensoryFrame frame;
+  frame.insert(laser("front", kT0, true, 0.3));
+  log.insert(frame);
+  mrpt::obs::CActionRobotMovement2D move;
+  move.computeFromOdometry(mrpt::poses::CPose2D(1.0, 0.0, 0.0),
+                           mrpt::obs::CActionRobotMovement2D::TMotionModelOptions{});
+  mrpt::obs::CActionCollection actions;
+  actions.insert(move);
+  actions.insert(move);
+  log.insert(actions);
+  log.setCommentText("a comment");
+  const auto nested = [&](int depth) {  // @p log inside depth - 1 others.
+    auto outer = std::make_shared<mrpt::obs::CRawlog>(log);
+    for (int d = 1; d < depth; ++d) {
+      auto next = std::make_shared<mrpt::obs::CRawlog>();
+      next->insert(outer);
+      outer = next;
+    }
+    const std::string path = temp_path("whole_" + std::to_string(depth) + ".rawlog");
+    mrpt::io::CFileOutputStream out(path);
+    mrpt::serialization::archiveFrom(out) << *outer;
+    return path;
+  };
+  for (const int depth : {1, 8}) {
+    MrptRawlogReader reader(nested(depth));
+    std::vector<OdometryMessage> odometry;
+    const auto seen = read_all(reader, nullptr, &odometry);
+    EXPECT_EQ(seen.at("/front").size(), 1u) << depth;
+    ASSERT_EQ(odometry.size(), 3u) << depth;
+    EXPECT_NEAR(odometry[2].pose.x_m, 2.0, 1e-9) << depth;
+  }
+  const std::string deep = nested(9);
+  try {
+    MrptRawlogReader reader(deep);
+    FAIL() << "read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              deep + ": not a readable MRPT rawlog (CRawlogs nested more than 8 deep)");
+  }
+  std::string bytes = test::read_bytes(nested(1));
+  const std::string name = "mrpt::obs::CActionRobotMovement2D";
+  const std::size_t second = bytes.find(name, bytes.find(name) + 1);
+  ASSERT_NE(second, std::string::npos);
+  bytes.replace(second, name.size(), std::string("mrpt::obs::CAction") + std::string(15, '\0'));
+  bytes[second + name.size() + 1] = '\x88';
+  const std::string abstract = test::write_text("whole_abstract.rawlog", bytes);
+  try {
+    MrptRawlogReader reader(abstract);
+    FAIL() << "read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              abstract +
+                  ": not a readable MRPT rawlog (action 1 of a CActionCollection is 'CAction', "
+                  "not an action MRPT can make)");
+  }
 }
 
 }  // namespace

@@ -2,8 +2,9 @@
 function(dispel_set_warnings target)
   if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
     target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wconversion
-                                             -Wno-sign-conversion -Wnon-virtual-dtor
-                                             -Wold-style-cast -Wnull-dereference)
+                                             -Wno-sign-conversion -Wnull-dereference
+                                             $<$<COMPILE_LANGUAGE:CXX>:-Wnon-virtual-dtor>
+                                             $<$<COMPILE_LANGUAGE:CXX>:-Wold-style-cast>)
   elseif(MSVC)
     target_compile_options(${target} PRIVATE /W4)
   endif()

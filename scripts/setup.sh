@@ -25,6 +25,7 @@ packages=(
   python3-rosmaster python3-roslaunch python3-rosparam tf2-tools
                                        # their live tests: rosmaster, roslaunch,
                                        # static_transform_publisher
+  cyclonedds-dev cyclonedds-tools     # ROS 2 over DDS (ros2/, -DDISPEL_WITH_ROS2=ON): Cyclone DDS, idlc
   clang libclang-rt-14-dev             # scripts/fuzz.sh: libFuzzer, ASan, UBSan (build-fuzz/)
 )
 

@@ -23,6 +23,7 @@ set(rooms
   "3-jobs/render|core sim eval pipeline io jobs render|ros/ rosbag/ sensor_msgs/ mrpt/"
   "3-jobs/slam|core sim eval pipeline io jobs slam|ros/ rosbag/ sensor_msgs/ cairo"
   "4-frontends/ros1|core pipeline io ros1|rosbag/ cairo mrpt/"
+  "4-frontends/ros2|core pipeline io ros2|ros/ rosbag/ sensor_msgs/ cairo mrpt/"
   "4-frontends/cli|core sim eval pipeline io jobs render slam|ros/ rosbag/"
   "4-frontends/bench|core sim eval pipeline|ros/ rosbag/"
   "4-frontends/soak|core sim pipeline io|ros/ rosbag/ cairo mrpt/")
@@ -40,6 +41,7 @@ set(layer_of_room_jobs 3)
 set(layer_of_room_render 3)
 set(layer_of_room_slam 3)
 set(layer_of_room_ros1 4)
+set(layer_of_room_ros2 4)
 
 set(violations "")
 set(files_checked 0)

@@ -1,0 +1,252 @@
+// ROS 2 over Cyclone DDS: names, and messages through DDS between dispel's raw CDR and Cyclone's
+// own serialisation of the ROS 2 IDL (ros2_laser_scan.idl, compiled by Cyclone's idlc): the same
+// bytes both ways, so what dispel writes is what a node built on the type from its IDL reads.
+//
+// Every test is its own process (ctest), in a DDS domain of its own (from its process id) on the
+// loopback, so tests run side by side do not see each other. Endpoints in one process find each
+// other without the network; the waits below bound how long a failure takes to show, not how
+// long a pass takes (a match is normally there within milliseconds; 20 s is for a loaded
+// machine, where a thread may wait seconds for a core).
+#include "dispel/ros2/dds.hpp"
+
+#include <dds/dds.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <thread>
+
+#include "dispel/io/ros2_messages.hpp"
+#include "ros2_laser_scan.h"
+
+namespace dispel::ros2 {
+namespace {
+
+using io::ScanMessage;
+using io::Stamp;
+
+constexpr double kWaitS = 20.0;
+
+bool eventually(const std::function<bool()>& condition) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
+  while (!condition()) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return true;
+}
+
+int test_domain() { return 100 + static_cast<int>(::getpid() % 100); }
+
+class Ros2Dds : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    // The loopback only, without multicast: nothing leaves the machine.
+    ::setenv("CYCLONEDDS_URI",
+             "<General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
+             "<AllowMulticast>false</AllowMulticast></General>",
+             1);
+  }
+};
+
+ScanMessage example_scan() {
+  ScanMessage m;
+  m.header.stamp = Stamp::from_seconds(1700000000.25);
+  m.header.frame_id = "laser_front";
+  m.scan.stamp_s = m.header.stamp.seconds();
+  m.scan.angle_min_rad = -1.5;
+  m.scan.angle_increment_rad = 0.5;
+  m.angle_max = 1.5F;
+  m.scan.range_min_m = 0.1F;
+  m.scan.range_max_m = 30.0F;
+  m.scan.ranges_m = {1.0F, 2.5F, std::nanf(""), 4.0F, 30.5F, 0.05F, 7.0F};
+  m.scan.intensities = {10, 20, 30, 40, 50, 60, 70};
+  return m;
+}
+
+TEST(Ros2Names, TopicsAndTypesAsRos2MangesThem) {
+  EXPECT_EQ(dds_topic_name("/scan"), "rt/scan");
+  EXPECT_EQ(dds_topic_name("/robot_1/scan_filtered"), "rt/robot_1/scan_filtered");
+  for (const char* bad : {"scan", "/", "", "/a//b", "/a/", "/1scan", "/sc an", "/a/9"}) {
+    EXPECT_THROW(dds_topic_name(bad), DdsError) << bad;
+  }
+  EXPECT_EQ(dds_type_name("sensor_msgs/msg/LaserScan"), "sensor_msgs::msg::dds_::LaserScan_");
+  EXPECT_EQ(dds_type_name("tf2_msgs/TFMessage"), "tf2_msgs::msg::dds_::TFMessage_");
+  for (const char* bad : {"LaserScan", "sensor_msgs/srv/X", "a/msg/b/c", "a//b", "a/b-c"}) {
+    EXPECT_THROW(dds_type_name(bad), DdsError) << bad;
+  }
+}
+
+TEST(Ros2Names, DomainFromTheEnvironment) {
+  ::unsetenv("ROS_DOMAIN_ID");
+  EXPECT_EQ(domain_from_environment(), 0);
+  ::setenv("ROS_DOMAIN_ID", "42", 1);
+  EXPECT_EQ(domain_from_environment(), 42);
+  for (const char* bad : {"233", "-1", "4x", "1e2", "99999999999"}) {
+    ::setenv("ROS_DOMAIN_ID", bad, 1);
+    try {
+      domain_from_environment();
+      ADD_FAILURE() << bad;
+    } catch (const DdsError& e) {
+      EXPECT_EQ(std::string(e.what()),
+                std::string("ROS_DOMAIN_ID='") + bad + "' is not an integer from 0 to 232");
+    }
+  }
+  ::unsetenv("ROS_DOMAIN_ID");
+  EXPECT_THROW(Participant(233), DdsError);
+}
+
+// dispel writes a scan as raw CDR (io::encode_ros2); a reader of Cyclone's own type from the
+// ROS 2 IDL, in a participant of its own, gets every field; a raw reader gets the same bytes.
+TEST_F(Ros2Dds, RawCdrIsWhatCyclonesTypeFromTheRos2IdlReads) {
+  Participant ours(test_domain());
+  Participant theirs(test_domain());
+  Writer writer(ours, "/scan", "sensor_msgs/msg/LaserScan", Qos::defaults());
+  Reader raw(ours, "/scan", "sensor_msgs/msg/LaserScan", Qos::sensor_data());
+  const dds_entity_t topic = dds_create_topic(
+      theirs.handle(), &sensor_msgs_msg_dds__LaserScan__desc, "rt/scan", nullptr, nullptr);
+  ASSERT_GT(topic, 0);
+  dds_qos_t* qos = dds_create_qos();
+  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
+  const dds_entity_t typed = dds_create_reader(theirs.handle(), topic, qos, nullptr);
+  dds_delete_qos(qos);
+  ASSERT_GT(typed, 0);
+  ASSERT_TRUE(eventually([&] { return writer.matches().current == 2; }))
+      << writer.matches().current;
+
+  const ScanMessage scan = example_scan();
+  const std::vector<std::uint8_t> bytes = io::encode_ros2(scan);
+  writer.write(bytes);
+
+  std::vector<std::vector<std::uint8_t>> got;
+  ASSERT_TRUE(eventually([&] {
+    for (auto& b : raw.take(0.01)) got.push_back(std::move(b));
+    return !got.empty();
+  }));
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0], bytes);
+
+  void* samples[1] = {nullptr};
+  dds_sample_info_t info[1];
+  dds_return_t n = 0;
+  ASSERT_TRUE(eventually([&] {
+    n = dds_take(typed, samples, info, 1, 1);
+    return n != 0;
+  }));
+  ASSERT_EQ(n, 1);
+  ASSERT_TRUE(info[0].valid_data);
+  const auto* s = static_cast<const sensor_msgs_msg_dds__LaserScan_*>(samples[0]);
+  EXPECT_EQ(s->header_.stamp_.sec_, 1700000000);
+  EXPECT_EQ(s->header_.stamp_.nanosec_, 250000000u);
+  EXPECT_STREQ(s->header_.frame_id_, "laser_front");
+  EXPECT_EQ(s->angle_min_, -1.5F);
+  EXPECT_EQ(s->angle_max_, 1.5F);
+  EXPECT_EQ(s->angle_increment_, 0.5F);
+  EXPECT_EQ(s->range_max_, 30.0F);
+  ASSERT_EQ(s->ranges_._length, scan.scan.ranges_m.size());
+  ASSERT_EQ(s->intensities_._length, scan.scan.intensities.size());
+  for (std::size_t k = 0; k < scan.scan.ranges_m.size(); ++k) {
+    if (std::isnan(scan.scan.ranges_m[k])) {
+      EXPECT_TRUE(std::isnan(s->ranges_._buffer[k])) << k;
+    } else {
+      EXPECT_EQ(s->ranges_._buffer[k], scan.scan.ranges_m[k]) << k;
+    }
+    EXPECT_EQ(s->intensities_._buffer[k], scan.scan.intensities[k]) << k;
+  }
+  dds_return_loan(typed, samples, n);
+}
+
+// The other way: Cyclone serialises its type; dispel's raw reader gets the bytes io::encode_ros2
+// makes of the same scan, and decodes them to it.
+TEST_F(Ros2Dds, CyclonesSerialisationOfTheRos2IdlIsDispelsCdr) {
+  Participant theirs(test_domain());
+  Participant ours(test_domain());
+  Reader raw(ours, "/scan_in", "sensor_msgs/LaserScan", Qos::sensor_data());
+  const dds_entity_t topic = dds_create_topic(
+      theirs.handle(), &sensor_msgs_msg_dds__LaserScan__desc, "rt/scan_in", nullptr, nullptr);
+  ASSERT_GT(topic, 0);
+  const dds_entity_t typed = dds_create_writer(theirs.handle(), topic, nullptr, nullptr);
+  ASSERT_GT(typed, 0);
+  ASSERT_TRUE(eventually([&] { return raw.matches().current == 1; }));
+
+  const ScanMessage scan = example_scan();
+  float ranges[7];
+  float intensities[7];
+  for (std::size_t k = 0; k < 7; ++k) {
+    ranges[k] = scan.scan.ranges_m[k];
+    intensities[k] = scan.scan.intensities[k];
+  }
+  sensor_msgs_msg_dds__LaserScan_ s{};
+  s.header_.stamp_.sec_ = 1700000000;
+  s.header_.stamp_.nanosec_ = 250000000;
+  s.header_.frame_id_ = const_cast<char*>("laser_front");
+  s.angle_min_ = -1.5F;
+  s.angle_max_ = 1.5F;
+  s.angle_increment_ = 0.5F;
+  s.range_min_ = 0.1F;
+  s.range_max_ = 30.0F;
+  s.ranges_ = {7, 7, ranges, false};
+  s.intensities_ = {7, 7, intensities, false};
+  ASSERT_EQ(dds_write(typed, &s), DDS_RETCODE_OK);
+
+  std::vector<std::vector<std::uint8_t>> got;
+  ASSERT_TRUE(eventually([&] {
+    for (auto& b : raw.take(0.01)) got.push_back(std::move(b));
+    return !got.empty();
+  }));
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0], io::encode_ros2(scan));
+  const ScanMessage back = io::decode_ros2_scan(got[0].data(), got[0].size());
+  EXPECT_EQ(back.header.frame_id, "laser_front");
+  EXPECT_EQ(back.scan.ranges_m.size(), 7u);
+}
+
+// ROS 2's QoS rules as DDS applies them: a reliable writer serves a best-effort (sensor data)
+// reader; a best-effort writer cannot serve a reliable reader, and both ends report it, naming
+// the policy. A transient-local writer (/tf_static) gives a reader that comes later its sample.
+TEST_F(Ros2Dds, QosMatchesAsRos2sAndAMismatchIsReported) {
+  Participant p(test_domain());
+  Writer best_effort(p, "/points", "sensor_msgs/msg/LaserScan", Qos::sensor_data());
+  Reader reliable(p, "/points", "sensor_msgs/msg/LaserScan", Qos::defaults());
+  ASSERT_TRUE(eventually([&] { return reliable.matches().incompatible >= 1; }));
+  EXPECT_EQ(reliable.matches().current, 0);
+  EXPECT_EQ(reliable.matches().last_incompatible_policy, "reliability");
+  ASSERT_TRUE(eventually([&] { return best_effort.matches().incompatible >= 1; }));
+  EXPECT_EQ(best_effort.matches().last_incompatible_policy, "reliability");
+
+  const ScanMessage scan = example_scan();
+  Writer latched(p, "/tf_like", "sensor_msgs/msg/LaserScan", Qos::tf_static_publisher());
+  latched.write(io::encode_ros2(scan));
+  Reader late(p, "/tf_like", "sensor_msgs/msg/LaserScan", Qos::tf_static_subscriber());
+  std::vector<std::vector<std::uint8_t>> got;
+  ASSERT_TRUE(eventually([&] {
+    for (auto& b : late.take(0.01)) got.push_back(std::move(b));
+    return !got.empty();
+  }));
+  EXPECT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0], io::encode_ros2(scan));
+  EXPECT_EQ(late.matches().current, 1);
+}
+
+TEST_F(Ros2Dds, BadInputIsRefusedWithItsName) {
+  Participant p(test_domain());
+  Writer w(p, "/scan", "sensor_msgs/msg/LaserScan", Qos::defaults());
+  try {
+    w.write({1, 2});
+    FAIL() << "written";
+  } catch (const DdsError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "a message to write is not CDR with its encapsulation header (2 bytes)");
+  }
+  EXPECT_THROW(w.write({0, 7, 0, 0}), DdsError);  // Not XCDR1.
+  Qos zero = Qos::defaults();
+  zero.depth = 0;
+  EXPECT_THROW(Reader(p, "/x", "sensor_msgs/msg/LaserScan", zero), DdsError);
+}
+
+}  // namespace
+}  // namespace dispel::ros2

@@ -41,6 +41,9 @@ bool eventually(const std::function<bool()>& condition) {
 
 int test_domain() { return 100 + static_cast<int>(::getpid() % 100); }
 
+// A topic of this process alone: tests run side by side may share a domain.
+std::string own(const std::string& topic) { return topic + "_p" + std::to_string(::getpid()); }
+
 class Ros2Dds : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -104,10 +107,11 @@ TEST(Ros2Names, DomainFromTheEnvironment) {
 TEST_F(Ros2Dds, RawCdrIsWhatCyclonesTypeFromTheRos2IdlReads) {
   Participant ours(test_domain());
   Participant theirs(test_domain());
-  Writer writer(ours, "/scan", "sensor_msgs/msg/LaserScan", Qos::defaults());
-  Reader raw(ours, "/scan", "sensor_msgs/msg/LaserScan", Qos::sensor_data());
-  const dds_entity_t topic = dds_create_topic(
-      theirs.handle(), &sensor_msgs_msg_dds__LaserScan__desc, "rt/scan", nullptr, nullptr);
+  Writer writer(ours, own("/scan"), "sensor_msgs/msg/LaserScan", Qos::defaults());
+  Reader raw(ours, own("/scan"), "sensor_msgs/msg/LaserScan", Qos::sensor_data());
+  const dds_entity_t topic =
+      dds_create_topic(theirs.handle(), &sensor_msgs_msg_dds__LaserScan__desc,
+                       ("rt" + own("/scan")).c_str(), nullptr, nullptr);
   ASSERT_GT(topic, 0);
   dds_qos_t* qos = dds_create_qos();
   dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
@@ -165,9 +169,10 @@ TEST_F(Ros2Dds, RawCdrIsWhatCyclonesTypeFromTheRos2IdlReads) {
 TEST_F(Ros2Dds, CyclonesSerialisationOfTheRos2IdlIsDispelsCdr) {
   Participant theirs(test_domain());
   Participant ours(test_domain());
-  Reader raw(ours, "/scan_in", "sensor_msgs/LaserScan", Qos::sensor_data());
-  const dds_entity_t topic = dds_create_topic(
-      theirs.handle(), &sensor_msgs_msg_dds__LaserScan__desc, "rt/scan_in", nullptr, nullptr);
+  Reader raw(ours, own("/scan_in"), "sensor_msgs/LaserScan", Qos::sensor_data());
+  const dds_entity_t topic =
+      dds_create_topic(theirs.handle(), &sensor_msgs_msg_dds__LaserScan__desc,
+                       ("rt" + own("/scan_in")).c_str(), nullptr, nullptr);
   ASSERT_GT(topic, 0);
   const dds_entity_t typed = dds_create_writer(theirs.handle(), topic, nullptr, nullptr);
   ASSERT_GT(typed, 0);
@@ -210,8 +215,8 @@ TEST_F(Ros2Dds, CyclonesSerialisationOfTheRos2IdlIsDispelsCdr) {
 // the policy. A transient-local writer (/tf_static) gives a reader that comes later its sample.
 TEST_F(Ros2Dds, QosMatchesAsRos2sAndAMismatchIsReported) {
   Participant p(test_domain());
-  Writer best_effort(p, "/points", "sensor_msgs/msg/LaserScan", Qos::sensor_data());
-  Reader reliable(p, "/points", "sensor_msgs/msg/LaserScan", Qos::defaults());
+  Writer best_effort(p, own("/points"), "sensor_msgs/msg/LaserScan", Qos::sensor_data());
+  Reader reliable(p, own("/points"), "sensor_msgs/msg/LaserScan", Qos::defaults());
   ASSERT_TRUE(eventually([&] { return reliable.matches().incompatible >= 1; }));
   EXPECT_EQ(reliable.matches().current, 0);
   EXPECT_EQ(reliable.matches().last_incompatible_policy, "reliability");
@@ -219,9 +224,9 @@ TEST_F(Ros2Dds, QosMatchesAsRos2sAndAMismatchIsReported) {
   EXPECT_EQ(best_effort.matches().last_incompatible_policy, "reliability");
 
   const ScanMessage scan = example_scan();
-  Writer latched(p, "/tf_like", "sensor_msgs/msg/LaserScan", Qos::tf_static_publisher());
+  Writer latched(p, own("/tf_like"), "sensor_msgs/msg/LaserScan", Qos::tf_static_publisher());
   latched.write(io::encode_ros2(scan));
-  Reader late(p, "/tf_like", "sensor_msgs/msg/LaserScan", Qos::tf_static_subscriber());
+  Reader late(p, own("/tf_like"), "sensor_msgs/msg/LaserScan", Qos::tf_static_subscriber());
   std::vector<std::vector<std::uint8_t>> got;
   ASSERT_TRUE(eventually([&] {
     for (auto& b : late.take(0.01)) got.push_back(std::move(b));
@@ -234,7 +239,7 @@ TEST_F(Ros2Dds, QosMatchesAsRos2sAndAMismatchIsReported) {
 
 TEST_F(Ros2Dds, BadInputIsRefusedWithItsName) {
   Participant p(test_domain());
-  Writer w(p, "/scan", "sensor_msgs/msg/LaserScan", Qos::defaults());
+  Writer w(p, own("/scan"), "sensor_msgs/msg/LaserScan", Qos::defaults());
   try {
     w.write({1, 2});
     FAIL() << "written";
@@ -245,7 +250,7 @@ TEST_F(Ros2Dds, BadInputIsRefusedWithItsName) {
   EXPECT_THROW(w.write({0, 7, 0, 0}), DdsError);  // Not XCDR1.
   Qos zero = Qos::defaults();
   zero.depth = 0;
-  EXPECT_THROW(Reader(p, "/x", "sensor_msgs/msg/LaserScan", zero), DdsError);
+  EXPECT_THROW(Reader(p, own("/x"), "sensor_msgs/msg/LaserScan", zero), DdsError);
 }
 
 }  // namespace

@@ -1,0 +1,216 @@
+// dispel-ros2 filter, live over DDS on the loopback: the test, a DDS participant of its own, plays
+// the leg_tracker recording's scans (a stationary Hokuyo, people walking past) the way a ROS 2
+// driver publishes them, and receives the node's <scan>_filtered and <scan>_labels; they must be
+// what the shared runner makes of the same scans in-process, with the options `dispel filter
+// --static-sensor --scale-to-scanner` gives it (the one road both take), scan for scan. Both QoS
+// a driver may use on the scans: reliable (ROS 2's default) and best effort (sensor data). Then a
+// publisher of /tf_static with a QoS the node cannot match: the node says so. Then SIGTERM: the
+// node stops, exit 0, with its counts.
+//
+// No scheduling luck: the test sends a scan only once the node's outputs of the previous one are
+// in (lock step), so the node's reliable writers never hold more than one sample for the test and
+// no queue can overflow; and only once both ends of each topic have found each other (the
+// node says when its ends have). The scans' DDS reader is best effort (what ROS 2 drivers'
+// subscribers use) even for a reliable writer; on the loopback, with one sample in flight, nothing
+// is lost (a lost sample would fail the test after kWaitS, not pass it). The waits (kWaitS) only
+// bound how long a failure takes to show: discovery on the loopback takes milliseconds, a loaded
+// machine may take seconds.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <thread>
+
+#include "dispel/io/config_yaml.hpp"
+#include "dispel/io/ros2_messages.hpp"
+#include "dispel/jobs/job.hpp"
+#include "dispel/pipeline/scan_filter_runner.hpp"
+#include "dispel/ros2/dds.hpp"
+#include "test_files.hpp"
+
+namespace dispel::ros2 {
+namespace {
+
+constexpr double kWaitS = 20.0;
+// Unicast discovery on the loopback (no multicast: CI machines may have none), ports of up to
+// 20 participants; nothing leaves the machine.
+constexpr const char* kLoopback =
+    "<General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
+    "<AllowMulticast>false</AllowMulticast></General><Discovery><Peers><Peer "
+    "address=\"127.0.0.1\"/></Peers><ParticipantIndex>auto</ParticipantIndex>"
+    "<MaxAutoParticipantIndex>20</MaxAutoParticipantIndex></Discovery>";
+
+bool eventually(const std::function<bool()>& condition) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
+  while (!condition()) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return true;
+}
+
+std::vector<io::ScanMessage> recorded_scans() {
+  auto reader = jobs::open_recording(
+      test::source_path("data/leg_tracker/demo_stationary_simple_environment.bag"));
+  std::vector<io::ScanMessage> scans;
+  reader->read({"/scan"}, [&](const io::RecordedMessage& m) {
+    if (auto s = m.scan()) scans.push_back(*s);
+  });
+  return scans;
+}
+
+// The node as a child process, its stderr in a file.
+class NodeProcess {
+ public:
+  NodeProcess(const std::string& params, int domain) : log_(test::temp_path("node.log")) {
+    const std::string params_path = test::write_text("params.yaml", params);
+    pid_ = ::fork();
+    if (pid_ == 0) {
+      const int fd = ::open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      ::dup2(fd, 2);
+      ::setenv("ROS_DOMAIN_ID", std::to_string(domain).c_str(), 1);
+      ::execl(DISPEL_ROS2_EXECUTABLE, DISPEL_ROS2_EXECUTABLE, "filter", "--ros-args",
+              "--params-file", params_path.c_str(), "-r", "__node:=dispel_filter", nullptr);
+      ::_exit(127);
+    }
+  }
+  ~NodeProcess() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+  }
+  // SIGTERM, then its exit status (-1: it did not stop within kWaitS).
+  int stop() {
+    ::kill(pid_, SIGTERM);
+    int status = 0;
+    const bool exited = eventually([&] { return ::waitpid(pid_, &status, WNOHANG) == pid_; });
+    if (!exited) return -1;
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+  std::string log() const { return test::read_bytes(log_); }
+
+ private:
+  std::string log_;
+  pid_t pid_ = -1;
+};
+
+void play_and_compare(Qos scan_qos, const char* name) {
+  SCOPED_TRACE(name);
+  ::setenv("CYCLONEDDS_URI", kLoopback, 1);
+  const int domain = 150 + static_cast<int>(::getpid() % 50);
+  const std::vector<io::ScanMessage> scans = recorded_scans();
+  ASSERT_GT(scans.size(), 100u);
+
+  // The reference: the runner as `dispel filter --static-sensor --scale-to-scanner` runs it,
+  // with dispel's default configuration (`dispel filter` without --config).
+  // The scan topic of this process alone: the live tests run side by side may share a domain.
+  const std::string scan_topic = "/scan_p" + std::to_string(::getpid());
+  const std::string params =
+      "dispel_filter:\n  ros__parameters:\n    static_sensor: true\n    scale_to_scanner: true\n"
+      "    scan_topic: " +
+      scan_topic + "\n";
+  pipeline::ScanFilterRunnerOptions options;
+  options.config = io::parse_filter_config("{}", "defaults");
+  options.scale_to_scanner = true;
+  pipeline::ScanFilterRunner reference(options);
+
+  NodeProcess node(params, domain);
+  Participant test(domain);
+  Writer driver(test, scan_topic, "sensor_msgs/msg/LaserScan", scan_qos);
+  Reader filtered(test, scan_topic + "_filtered", "sensor_msgs/msg/LaserScan", Qos::defaults());
+  Reader labels(test, scan_topic + "_labels", "sensor_msgs/msg/LaserScan", Qos::defaults());
+  // Both ends of each topic must know the other before a sample can go: a best-effort reader
+  // drops what comes from a writer it has not discovered yet, a volatile writer sends nothing to
+  // a reader it has not. The test's ends say so themselves; the node's say so in its log.
+  ASSERT_TRUE(eventually([&] {
+    const std::string log = node.log();
+    return driver.matches().current == 1 && filtered.matches().current == 1 &&
+           labels.matches().current == 1 &&
+           log.find(scan_topic + ": 1 publishers matched") != std::string::npos &&
+           log.find(scan_topic + "_filtered: 1 subscribers matched") != std::string::npos &&
+           log.find(scan_topic + "_labels: 1 subscribers matched") != std::string::npos;
+  })) << node.log();
+
+  std::int64_t removed = 0;
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    driver.write(io::encode_ros2(scans[k]));
+    std::vector<std::vector<std::uint8_t>> f, l;
+    ASSERT_TRUE(eventually([&] {
+      for (auto& b : filtered.take(0.0)) f.push_back(std::move(b));
+      for (auto& b : labels.take(0.0)) l.push_back(std::move(b));
+      return !f.empty() && !l.empty();
+    })) << "scan "
+        << k << "\n"
+        << node.log();
+    ASSERT_EQ(f.size(), 1u) << k;
+    ASSERT_EQ(l.size(), 1u) << k;
+    const FilterResult& expected =
+        reference.process(scans[k].scan, scans[k].scan_time, Pose2{});  // Static: the identity.
+    const io::ScanMessage want_filtered = io::filtered_message(scans[k], expected);
+    const io::ScanMessage want_labels = io::labels_message(scans[k], expected);
+    ASSERT_EQ(f[0], io::encode_ros2(want_filtered)) << "scan " << k;
+    ASSERT_EQ(l[0], io::encode_ros2(want_labels)) << "scan " << k;
+    for (float r : want_filtered.scan.ranges_m) removed += std::isnan(r) ? 1 : 0;
+  }
+  EXPECT_GT(removed, 0);  // The walkers: the comparison saw removals, not only a copy.
+
+  // A /tf_static publisher the node cannot match (best effort, volatile): the node says so.
+  Writer bad_tf(test, "/tf_static", "tf2_msgs/msg/TFMessage", Qos::sensor_data());
+  ASSERT_TRUE(eventually([&] {
+    return node.log().find(
+               "warning: a publisher of /tf_static has a QoS this node cannot "
+               "match") != std::string::npos;
+  })) << node.log();
+
+  EXPECT_EQ(node.stop(), 0) << node.log();
+  const std::string counts =
+      std::to_string(scans.size()) + " scans in, " + std::to_string(scans.size()) + " published";
+  EXPECT_NE(node.log().find(counts), std::string::npos) << node.log();
+}
+
+TEST(Ros2FilterNodeLive, FiltersTheRecordingLikeDispelFilterWithAReliableDriver) {
+  play_and_compare(Qos::defaults(), "reliable driver");
+}
+
+TEST(Ros2FilterNodeLive, FiltersTheRecordingLikeDispelFilterWithABestEffortDriver) {
+  play_and_compare(Qos::sensor_data(), "best-effort driver");
+}
+
+TEST(Ros2FilterNodeLive, BadCommandLinesAndParameterFilesFailWithTheirName) {
+  const auto run = [](const std::string& args) {
+    const std::string command = std::string(DISPEL_ROS2_EXECUTABLE) + " " + args + " 2>&1";
+    FILE* p = ::popen(command.c_str(), "r");
+    std::string out;
+    char buf[512];
+    while (std::fgets(buf, sizeof buf, p) != nullptr) out += buf;
+    const int status = ::pclose(p);
+    return std::make_pair(WEXITSTATUS(status), out);
+  };
+  EXPECT_EQ(run("").first, 2);
+  EXPECT_EQ(run("odometry").first, 2);
+  const auto missing = run("filter --params-file /nonexistent/p.yaml");
+  EXPECT_EQ(missing.first, 2);
+  EXPECT_NE(missing.second.find("/nonexistent/p.yaml"), std::string::npos) << missing.second;
+  const std::string bad = test::write_text("bad.yaml", "queue_size: -3\n");
+  const auto refused = run("filter --params-file " + bad);
+  EXPECT_EQ(refused.first, 2);
+  EXPECT_NE(refused.second.find("queue_size must be an integer >= 1"), std::string::npos)
+      << refused.second;
+  ::setenv("ROS_DOMAIN_ID", "300", 1);
+  const auto domain = run("filter");
+  ::unsetenv("ROS_DOMAIN_ID");
+  EXPECT_EQ(domain.first, 3);
+  EXPECT_NE(domain.second.find("ROS_DOMAIN_ID='300'"), std::string::npos) << domain.second;
+}
+
+}  // namespace
+}  // namespace dispel::ros2

@@ -1,0 +1,165 @@
+// The ROS 2 filter node's work without DDS: its parameter file, the sensor pose from /tf and
+// /tf_static, scans waiting for it, and what happens when it never comes.
+#include "dispel/ros2/filter_node.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "dispel/io/errors.hpp"
+
+namespace dispel::ros2 {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string parse_error(const std::string& yaml, const std::string& node = "dispel_filter") {
+  try {
+    parse_filter_node_parameters(yaml, "p.yaml", node);
+  } catch (const io::ConfigError& e) {
+    return e.what();
+  }
+  return "parsed";
+}
+
+TEST(Ros2FilterNodeParameters, Ros2sLayoutFlatFilesAndTheFiltersKeys) {
+  const std::string ros2 =
+      "dispel_filter:\n"
+      "  ros__parameters:\n"
+      "    fixed_frame: /map\n"
+      "    scan_topic: front/scan\n"
+      "    on_missing_transform: drop\n"
+      "    queue_size: 4\n"
+      "    scale_to_scanner: true\n"
+      "    max_time_gap_s: 2.5\n"
+      "    tracking: {match_distance_m: 0.3}\n"
+      "other_node:\n"
+      "  ros__parameters: {fixed_frame: x}\n";
+  const FilterNodeSettings s = parse_filter_node_parameters(ros2, "p.yaml", "dispel_filter");
+  EXPECT_EQ(s.fixed_frame, "map");
+  EXPECT_EQ(s.scan_topic, "/front/scan");
+  EXPECT_TRUE(s.drop_without_transform);
+  EXPECT_EQ(s.queue_size, 4);
+  EXPECT_TRUE(s.runner.scale_to_scanner);
+  EXPECT_EQ(s.runner.config.max_time_gap_s, 2.5);
+  EXPECT_EQ(s.runner.config.tracking.match_distance_m, 0.3);
+  // "/**" is every node's; a flat file is the node's; nothing is the defaults.
+  EXPECT_EQ(parse_filter_node_parameters("/**:\n  ros__parameters: {fixed_frame: map}\n", "p",
+                                         "dispel_filter")
+                .fixed_frame,
+            "map");
+  EXPECT_EQ(parse_filter_node_parameters("static_sensor: true\n", "p", "n").static_sensor, true);
+  EXPECT_EQ(parse_filter_node_parameters("", "p", "n").fixed_frame, "odom");
+
+  EXPECT_EQ(parse_error("other:\n  ros__parameters: {}\n"),
+            "p.yaml: has parameters for 'other', not for 'dispel_filter' or /**");
+  EXPECT_EQ(parse_error("queue_size: 0\n"), "p.yaml: queue_size must be an integer >= 1 (got '0')");
+  EXPECT_EQ(parse_error("queue_size: 2.5\n"),
+            "p.yaml: queue_size must be an integer from 1 to 1000000");
+  EXPECT_EQ(parse_error("on_missing_transform: wait\n"),
+            "p.yaml: on_missing_transform must be publish_unfiltered or drop (got 'wait')");
+  EXPECT_EQ(parse_error("transform_timeout_s: .nan\n"),
+            "p.yaml: transform_timeout_s must be a finite number >= 0 (got '.nan')");
+  EXPECT_EQ(parse_error("use_sim_time: true\n"),
+            "p.yaml: use_sim_time is not supported yet (docs/ros2.md)");
+  EXPECT_NE(parse_error("no_such_key: 1\n").find("no_such_key"), std::string::npos);
+  EXPECT_EQ(parse_error("- a list\n"), "p.yaml: must be a mapping of parameters");
+  EXPECT_NE(parse_error("a: [\n").find("p.yaml: not YAML"), std::string::npos);
+}
+
+// A laser 0.2 m ahead of base_link in a 6 m round room, 360 beams.
+io::ScanMessage room_scan(double t) {
+  io::ScanMessage m;
+  m.header.stamp = io::Stamp::from_seconds(t);
+  m.header.frame_id = "laser";
+  m.scan.stamp_s = m.header.stamp.seconds();
+  m.scan.angle_min_rad = -kPi;
+  m.scan.angle_increment_rad = 2 * kPi / 360;
+  m.angle_max = static_cast<float>(kPi - 2 * kPi / 360);
+  m.scan.range_min_m = 0.1F;
+  m.scan.range_max_m = 20.0F;
+  m.scan.ranges_m.assign(360, 6.0F);
+  return m;
+}
+
+io::TransformsMessage transform(double t, const std::string& parent, const std::string& child,
+                                Pose2 pose) {
+  io::TransformsMessage m;
+  m.transforms.push_back({io::Stamp::from_seconds(t), parent, child, pose});
+  return m;
+}
+
+TEST(Ros2FilterNodeCore, AScanWaitsForItsPoseFromTfAndItsMountFromTfStatic) {
+  FilterNodeSettings s;
+  s.transform_timeout_s = 0.5;
+  FilterNodeCore core(s);
+  core.transforms(transform(0.0, "base_link", "laser", {0.2, 0.0, 0.0}), true);
+  core.transforms(transform(99.9, "odom", "base_link", {1.0, 0.0, 0.0}), false);
+  // The scan at t = 100 is after the last pose (99.9, beyond the tolerance): it waits.
+  EXPECT_TRUE(core.scan(room_scan(100.0), 1000.0).empty());
+  EXPECT_TRUE(core.poll(1000.1).empty());
+  core.transforms(transform(100.1, "/odom", "/base_link", {2.0, 0.0, 0.0}), false);
+  const std::vector<FilterNodeOutput> out = core.poll(1000.2);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].outcome, pipeline::ScanOutcome::kFiltered);
+  EXPECT_EQ(out[0].filtered.header.frame_id, "laser");
+  EXPECT_EQ(out[0].labels.scan.intensities.size(), 360u);
+  EXPECT_EQ(core.counts().published, 1);
+}
+
+TEST(Ros2FilterNodeCore, WithoutAPoseInTimeAScanIsPublishedUnfilteredOrDropped) {
+  for (const bool drop : {false, true}) {
+    FilterNodeSettings s;
+    s.transform_timeout_s = 0.1;
+    s.drop_without_transform = drop;
+    FilterNodeCore core(s);
+    EXPECT_TRUE(core.scan(room_scan(5.0), 10.0).empty());
+    EXPECT_TRUE(core.poll(10.05).empty());
+    const std::vector<FilterNodeOutput> out = core.poll(10.11);
+    if (drop) {
+      EXPECT_TRUE(out.empty());
+      EXPECT_EQ(core.counts().dropped_without_transform, 1);
+    } else {
+      ASSERT_EQ(out.size(), 1u);
+      // Without a pose the filter registers the scan itself (the default configuration), so it
+      // is filtered; all of the room is kept.
+      EXPECT_EQ(out[0].outcome, pipeline::ScanOutcome::kFiltered);
+      EXPECT_EQ(out[0].filtered.scan.ranges_m, room_scan(5.0).scan.ranges_m);
+    }
+  }
+}
+
+// A scan before the first pose will never have one: it goes at once. The queue is bounded: the
+// oldest waiting scans are dropped and counted.
+TEST(Ros2FilterNodeCore, ScansThatCanNeverHaveAPoseGoAtOnceAndTheQueueIsBounded) {
+  FilterNodeSettings s;
+  s.transform_timeout_s = 10.0;
+  s.queue_size = 3;
+  FilterNodeCore core(s);
+  core.transforms(transform(0.0, "base_link", "laser", {}), true);
+  core.transforms(transform(50.0, "odom", "base_link", {}), false);
+  const std::vector<FilterNodeOutput> early = core.scan(room_scan(40.0), 1.0);
+  ASSERT_EQ(early.size(), 1u);
+  for (int k = 0; k < 5; ++k) EXPECT_TRUE(core.scan(room_scan(60.0 + k), 2.0).empty());
+  EXPECT_EQ(core.counts().dropped_queue_full, 2);
+  core.transforms(transform(70.0, "odom", "base_link", {}), false);
+  EXPECT_EQ(core.poll(2.1).size(), 3u);  // 62, 63, 64: interpolated.
+  EXPECT_EQ(core.counts().scans_in, 6);
+  EXPECT_EQ(core.counts().published, 4);
+  // A transform that is not finite, or not after the last one, is refused and counted.
+  core.transforms(transform(69.0, "odom", "base_link", {}), false);
+  core.transforms(transform(71.0, "base_link", "laser", {std::nan(""), 0.0, 0.0}), true);
+  EXPECT_EQ(core.counts().transforms_refused, 2);
+}
+
+TEST(Ros2FilterNodeCore, AStaticSensorNeedsNoTransforms) {
+  FilterNodeSettings s;
+  s.static_sensor = true;
+  FilterNodeCore core(s);
+  const std::vector<FilterNodeOutput> out = core.scan(room_scan(1.0), 0.0);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].outcome, pipeline::ScanOutcome::kFiltered);
+}
+
+}  // namespace
+}  // namespace dispel::ros2

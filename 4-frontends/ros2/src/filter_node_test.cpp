@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "dispel/io/errors.hpp"
+#include "test_files.hpp"
 
 namespace dispel::ros2 {
 namespace {
@@ -65,6 +66,22 @@ TEST(Ros2FilterNodeParameters, Ros2sLayoutFlatFilesAndTheFiltersKeys) {
   EXPECT_NE(parse_error("no_such_key: 1\n").find("no_such_key"), std::string::npos);
   EXPECT_EQ(parse_error("- a list\n"), "p.yaml: must be a mapping of parameters");
   EXPECT_NE(parse_error("a: [\n").find("p.yaml: not YAML"), std::string::npos);
+}
+
+// The shipped parameter file states the defaults.
+TEST(Ros2FilterNodeParameters, TheShippedParameterFileStatesTheDefaults) {
+  const std::string path = test::source_path("4-frontends/ros2/config/dispel_filter.yaml");
+  const FilterNodeSettings s =
+      parse_filter_node_parameters(test::read_bytes(path), path, "dispel_filter");
+  const FilterNodeSettings d;
+  EXPECT_EQ(s.scan_topic, d.scan_topic);
+  EXPECT_EQ(s.fixed_frame, d.fixed_frame);
+  EXPECT_EQ(s.static_sensor, d.static_sensor);
+  EXPECT_EQ(s.transform_timeout_s, d.transform_timeout_s);
+  EXPECT_EQ(s.drop_without_transform, d.drop_without_transform);
+  EXPECT_EQ(s.queue_size, d.queue_size);
+  EXPECT_EQ(s.runner.scale_to_scanner, d.runner.scale_to_scanner);
+  EXPECT_EQ(s.runner.scan_period_s, d.runner.scan_period_s);
 }
 
 // A laser 0.2 m ahead of base_link in a 6 m round room, 360 beams.

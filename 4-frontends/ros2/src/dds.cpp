@@ -221,10 +221,10 @@ std::string dds_message(const std::string& what, dds_return_t rc) {
 }
 
 // A topic of @p type on the participant, its sertype (Cyclone's, which may be one it knew).
-dds_entity_t make_topic(const Participant& participant, const std::string& ros_topic,
-                        const std::string& ros_type, ddsi_sertype** actual) {
-  const std::string topic = dds_topic_name(ros_topic);
-  const std::string type = dds_type_name(ros_type);
+dds_entity_t make_topic(const Participant& participant, const DdsTopic& dds,
+                        ddsi_sertype** actual) {
+  const std::string& topic = dds.name;
+  const std::string& type = dds.type;
   auto* t = new RawType();
   ddsi_sertype_init_flags(t, type.c_str(), &kTypeOps, &kDataOps,
                           DDSI_SERTYPE_FLAG_TOPICKIND_NO_KEY);
@@ -371,10 +371,10 @@ Participant::~Participant() { dds_delete(handle_); }
 
 std::array<std::uint8_t, 16> Participant::guid() const { return guid_of(handle_); }
 
-Writer::Writer(Participant& participant, const std::string& ros_topic, const std::string& ros_type,
-               const Qos& qos) {
+Writer::Writer(Participant& participant, const DdsTopic& topic, const Qos& qos) {
   const QosHandle q(qos);
-  topic_ = make_topic(participant, ros_topic, ros_type, &type_);
+  const std::string& ros_topic = topic.name;
+  topic_ = make_topic(participant, topic, &type_);
   writer_ = dds_create_writer(participant.handle(), topic_, q.q, nullptr);
   if (writer_ < 0) {
     dds_delete(topic_);
@@ -418,11 +418,11 @@ Matches Writer::matches() const {
 
 std::array<std::uint8_t, 16> Writer::guid() const { return guid_of(writer_); }
 
-Reader::Reader(Participant& participant, const std::string& ros_topic, const std::string& ros_type,
-               const Qos& qos) {
+Reader::Reader(Participant& participant, const DdsTopic& topic, const Qos& qos) {
   const QosHandle q(qos);
+  const std::string& ros_topic = topic.name;
   ddsi_sertype* type = nullptr;
-  topic_ = make_topic(participant, ros_topic, ros_type, &type);
+  topic_ = make_topic(participant, topic, &type);
   reader_ = dds_create_reader(participant.handle(), topic_, q.q, nullptr);
   if (reader_ < 0) {
     dds_delete(topic_);

@@ -20,6 +20,8 @@
 #include <thread>
 
 #include "dispel/io/ros2_messages.hpp"
+#include "dispel/ros2/graph.hpp"
+#include "rmw_dds_common_humble.h"
 #include "ros2_laser_scan.h"
 
 namespace dispel::ros2 {
@@ -235,6 +237,70 @@ TEST_F(Ros2Dds, QosMatchesAsRos2sAndAMismatchIsReported) {
   EXPECT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0], io::encode_ros2(scan));
   EXPECT_EQ(late.matches().current, 1);
+}
+
+// The graph's sample (ros_discovery_info) as ROS 2 Humble's RMW reads it: Cyclone's type from
+// rmw_dds_common's Humble IDL (rmw_dds_common_humble.idl) gets every field. Iron's layout is the
+// same with 16-byte gids.
+TEST_F(Ros2Dds, TheGraphSampleIsWhatRos2sGraphTypeReads) {
+  Participant ours(test_domain());
+  Participant theirs(test_domain());
+  Guid participant{}, reader{}, writer_a{}, writer_b{};
+  for (std::uint8_t k = 0; k < 16; ++k) {
+    participant[k] = k;
+    reader[k] = static_cast<std::uint8_t>(0x10 + k);
+    writer_a[k] = static_cast<std::uint8_t>(0x20 + k);
+    writer_b[k] = static_cast<std::uint8_t>(0x30 + k);
+  }
+  const NodeEntities node{"/", "dispel_filter", {reader}, {writer_a, writer_b}};
+  const std::string topic = "ros_discovery_info_p" + std::to_string(::getpid());
+  Writer graph(ours, DdsTopic{topic, discovery_topic().type}, discovery_qos());
+  graph.write(encode_participant_entities(participant, {node}, GidLayout::kHumble));
+  // Transient local: a reader that comes later gets it, as ROS 2's tools do.
+  const dds_entity_t t =
+      dds_create_topic(theirs.handle(), &rmw_dds_common_msg_dds__ParticipantEntitiesInfo__desc,
+                       topic.c_str(), nullptr, nullptr);
+  ASSERT_GT(t, 0);
+  dds_qos_t* qos = dds_create_qos();
+  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
+  const dds_entity_t r = dds_create_reader(theirs.handle(), t, qos, nullptr);
+  dds_delete_qos(qos);
+  ASSERT_GT(r, 0);
+  void* samples[1] = {nullptr};
+  dds_sample_info_t info[1];
+  dds_return_t n = 0;
+  ASSERT_TRUE(eventually([&] {
+    n = dds_take(r, samples, info, 1, 1);
+    return n != 0;
+  }));
+  ASSERT_EQ(n, 1);
+  const auto* p = static_cast<const rmw_dds_common_msg_dds__ParticipantEntitiesInfo_*>(samples[0]);
+  for (std::size_t k = 0; k < 24; ++k) {
+    EXPECT_EQ(p->gid_.data_[k], k < 16 ? participant[k] : 0) << k;  // Zero-padded.
+  }
+  ASSERT_EQ(p->node_entities_info_seq_._length, 1u);
+  const auto& e = p->node_entities_info_seq_._buffer[0];
+  EXPECT_STREQ(e.node_namespace_, "/");
+  EXPECT_STREQ(e.node_name_, "dispel_filter");
+  ASSERT_EQ(e.reader_gid_seq_._length, 1u);
+  ASSERT_EQ(e.writer_gid_seq_._length, 2u);
+  EXPECT_EQ(e.reader_gid_seq_._buffer[0].data_[0], 0x10);
+  EXPECT_EQ(e.writer_gid_seq_._buffer[1].data_[15], 0x3f);
+  EXPECT_EQ(e.writer_gid_seq_._buffer[1].data_[16], 0);
+  dds_return_loan(r, samples, n);
+
+  // Iron on: 16-byte gids, so 8 bytes fewer per gid (4 gids) than Humble's.
+  EXPECT_EQ(encode_participant_entities(participant, {node}, GidLayout::kHumble).size() -
+                encode_participant_entities(participant, {node}, GidLayout::kIron).size(),
+            4u * 8u);
+  EXPECT_EQ(gid_layout_named("jazzy"), GidLayout::kIron);
+  EXPECT_EQ(gid_layout_named("humble"), GidLayout::kHumble);
+  EXPECT_THROW(gid_layout_named("foxy2"), DdsError);
+  EXPECT_THROW(encode_participant_entities(participant, {{"/", std::string(257, 'n'), {}, {}}},
+                                           GidLayout::kIron),
+               DdsError);
 }
 
 TEST_F(Ros2Dds, BadInputIsRefusedWithItsName) {

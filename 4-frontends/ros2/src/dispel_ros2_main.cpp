@@ -14,6 +14,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,7 @@
 #include "dispel/io/text.hpp"
 #include "dispel/ros2/dds.hpp"
 #include "dispel/ros2/filter_node.hpp"
+#include "dispel/ros2/graph.hpp"
 
 namespace {
 
@@ -59,13 +61,38 @@ int run_filter(const ros2::FilterNodeSettings& settings) {
                       ros2::Qos::defaults());
   ros2::FilterNodeCore core(settings);
 
+  // The node in ROS 2's graph (ros2 node list), in the layout of the robot's distribution.
+  std::string distro = settings.ros_distro;  // Checked when the parameters were read.
+  if (distro.empty()) {
+    const char* env = std::getenv("ROS_DISTRO");
+    distro = env != nullptr && *env != '\0' ? env : "humble";
+    try {
+      ros2::gid_layout_named(distro);
+    } catch (const ros2::DdsError&) {  // A ROS 1 shell's "noetic", say.
+      std::fprintf(stderr,
+                   "dispel-ros2 filter: warning: ROS_DISTRO=%s is not a ROS 2 distribution this "
+                   "node knows; its graph uses humble's layout (set ros_distro to choose)\n",
+                   io::one_line(distro, 40).c_str());
+      distro = "humble";
+    }
+  }
+  const ros2::GidLayout layout = ros2::gid_layout_named(distro);
+  ros2::Writer graph(participant, ros2::discovery_topic(), ros2::discovery_qos());
+  ros2::NodeEntities node{"/", settings.node_name, {}, {}};
+  node.readers = {scans.guid(), tf.guid(), tf_static.guid()};
+  node.writers = {filtered.guid(), labels.guid()};
+  graph.write(ros2::encode_participant_entities(participant.guid(), {node}, layout));
+
   struct sigaction action {};
   action.sa_handler = on_signal;
   ::sigaction(SIGINT, &action, nullptr);
   ::sigaction(SIGTERM, &action, nullptr);
-  std::fprintf(stderr, "dispel-ros2 filter: %s on domain %d: %s -> %s_filtered, %s_labels\n",
-               settings.node_name.c_str(), participant.domain_id(), settings.scan_topic.c_str(),
-               settings.scan_topic.c_str(), settings.scan_topic.c_str());
+  std::fprintf(stderr,
+               "dispel-ros2 filter: node /%s on domain %d (graph in %s's layout): %s -> "
+               "%s_filtered, %s_labels\n",
+               settings.node_name.c_str(), participant.domain_id(), distro.c_str(),
+               settings.scan_topic.c_str(), settings.scan_topic.c_str(),
+               settings.scan_topic.c_str());
 
   const auto take_transforms = [&](ros2::Reader& reader, bool is_static) {
     for (const auto& bytes : reader.take(0.0)) {
@@ -177,6 +204,14 @@ int main(int argc, char** argv) {
     } else {
       return usage("unknown or incomplete argument " + io::quote(a));
     }
+  }
+  const bool valid_name =
+      !node_name.empty() && !(node_name[0] >= '0' && node_name[0] <= '9') &&
+      node_name.find_first_not_of(
+          "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") == std::string::npos;
+  if (!valid_name) {
+    return usage("the node name " + io::quote(node_name) +
+                 " is not a ROS 2 node name (letters, digits and '_', not starting with a digit)");
   }
   try {
     const std::string text =

@@ -9,6 +9,7 @@
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/errors.hpp"
 #include "dispel/io/text.hpp"
+#include "dispel/ros2/graph.hpp"
 
 namespace dispel::ros2 {
 namespace {
@@ -73,6 +74,14 @@ void read_node_keys(YAML::Node& p, FilterNodeSettings& s, const std::string& ori
     throw io::ConfigError(origin + ": queue_size must be an integer from 1 to 1000000");
   }
   s.queue_size = static_cast<int>(queue);
+  text("ros_distro", s.ros_distro);
+  if (!s.ros_distro.empty()) {
+    try {
+      gid_layout_named(s.ros_distro);
+    } catch (const DdsError& e) {
+      throw io::ConfigError(origin + ": " + e.what());
+    }
+  }
   boolean("scale_to_scanner", s.runner.scale_to_scanner);
   number("scan_period_s", s.runner.scan_period_s, 0.0, "a finite number >= 0 (0: from the scans)");
   for (const char* ros_only : {"use_sim_time"}) {

@@ -15,6 +15,7 @@
 // is lost (a lost sample would fail the test after kWaitS, not pass it). The waits (kWaitS) only
 // bound how long a failure takes to show: discovery on the loopback takes milliseconds, a loaded
 // machine may take seconds.
+#include <dds/dds.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -35,6 +36,8 @@
 #include "dispel/jobs/job.hpp"
 #include "dispel/pipeline/scan_filter_runner.hpp"
 #include "dispel/ros2/dds.hpp"
+#include "dispel/ros2/graph.hpp"
+#include "rmw_dds_common_humble.h"
 #include "test_files.hpp"
 
 namespace dispel::ros2 {
@@ -71,15 +74,18 @@ std::vector<io::ScanMessage> recorded_scans() {
 // The node as a child process, its stderr in a file.
 class NodeProcess {
  public:
-  NodeProcess(const std::string& params, int domain) : log_(test::temp_path("node.log")) {
+  NodeProcess(const std::string& params, const std::string& name, int domain)
+      : log_(test::temp_path("node.log")) {
     const std::string params_path = test::write_text("params.yaml", params);
+    const std::string node_arg = "__node:=" + name;  // Made before fork: the child only execs.
+    const std::string domain_id = std::to_string(domain);
     pid_ = ::fork();
     if (pid_ == 0) {
       const int fd = ::open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
       ::dup2(fd, 2);
-      ::setenv("ROS_DOMAIN_ID", std::to_string(domain).c_str(), 1);
+      ::setenv("ROS_DOMAIN_ID", domain_id.c_str(), 1);
       ::execl(DISPEL_ROS2_EXECUTABLE, DISPEL_ROS2_EXECUTABLE, "filter", "--ros-args",
-              "--params-file", params_path.c_str(), "-r", "__node:=dispel_filter", nullptr);
+              "--params-file", params_path.c_str(), "-r", node_arg.c_str(), nullptr);
       ::_exit(127);
     }
   }
@@ -105,6 +111,87 @@ class NodeProcess {
   pid_t pid_ = -1;
 };
 
+Guid guid_of(const dds_builtintopic_guid_t& g) {
+  Guid out{};
+  std::copy(std::begin(g.v), std::end(g.v), out.begin());
+  return out;
+}
+
+bool listed(const rmw_dds_common_msg_dds__Gid_* gids, std::uint32_t n, const Guid& g) {
+  for (std::uint32_t k = 0; k < n; ++k) {
+    if (std::equal(g.begin(), g.end(), gids[k].data_)) return true;
+  }
+  return false;
+}
+
+// The node in ROS 2's graph, as `ros2 node list` reads it (ros_discovery_info in Humble's layout,
+// Cyclone's type from rmw_dds_common's IDL): its name and namespace, and, as its own, the DDS
+// reader the test's driver writes to and the writers the test's readers read from (their GUIDs
+// as DDS discovery gave them to the test), under its participant's gid.
+void check_graph(Participant& test, const std::string& node_name, Writer& driver, Reader& filtered,
+                 Reader& labels) {
+  const dds_entity_t t =
+      dds_create_topic(test.handle(), &rmw_dds_common_msg_dds__ParticipantEntitiesInfo__desc,
+                       "ros_discovery_info", nullptr, nullptr);
+  ASSERT_GT(t, 0);
+  dds_qos_t* qos = dds_create_qos();
+  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
+  const dds_entity_t r = dds_create_reader(test.handle(), t, qos, nullptr);
+  dds_delete_qos(qos);
+  ASSERT_GT(r, 0);
+  // Another process's node may share the domain (tests run side by side): this one's sample is
+  // the one with its name.
+  void* samples[1] = {nullptr};
+  dds_sample_info_t info[1];
+  const rmw_dds_common_msg_dds__ParticipantEntitiesInfo_* p = nullptr;
+  ASSERT_TRUE(eventually([&] {
+    while (dds_take(r, samples, info, 1, 1) == 1) {
+      const auto* s =
+          static_cast<const rmw_dds_common_msg_dds__ParticipantEntitiesInfo_*>(samples[0]);
+      if (info[0].valid_data && s->node_entities_info_seq_._length == 1 &&
+          node_name == s->node_entities_info_seq_._buffer[0].node_name_) {
+        p = s;
+        return true;
+      }
+      dds_return_loan(r, samples, 1);
+    }
+    return false;
+  }));
+  const auto& node = p->node_entities_info_seq_._buffer[0];
+  EXPECT_STREQ(node.node_namespace_, "/");
+  const auto matched_guid = [](dds_entity_t entity, bool publications, Guid& guid,
+                               Guid& participant) {
+    dds_instance_handle_t handle = 0;
+    const dds_return_t found = publications ? dds_get_matched_publications(entity, &handle, 1)
+                                            : dds_get_matched_subscriptions(entity, &handle, 1);
+    if (found != 1) return false;
+    dds_builtintopic_endpoint_t* e = publications
+                                         ? dds_get_matched_publication_data(entity, handle)
+                                         : dds_get_matched_subscription_data(entity, handle);
+    if (e == nullptr) return false;
+    guid = guid_of(e->key);
+    participant = guid_of(e->participant_key);
+    dds_builtintopic_free_endpoint(e);
+    return true;
+  };
+  Guid g{}, owner{};
+  ASSERT_TRUE(matched_guid(driver.handle(), false, g, owner));
+  EXPECT_TRUE(listed(node.reader_gid_seq_._buffer, node.reader_gid_seq_._length, g));
+  EXPECT_TRUE(std::equal(owner.begin(), owner.end(), p->gid_.data_));
+  for (const std::uint8_t pad : std::vector<std::uint8_t>(p->gid_.data_ + 16, p->gid_.data_ + 24)) {
+    EXPECT_EQ(pad, 0);
+  }
+  for (Reader* reader : {&filtered, &labels}) {
+    ASSERT_TRUE(matched_guid(reader->handle(), true, g, owner));
+    EXPECT_TRUE(listed(node.writer_gid_seq_._buffer, node.writer_gid_seq_._length, g));
+  }
+  EXPECT_EQ(node.reader_gid_seq_._length, 3u);  // The scans, /tf, /tf_static.
+  EXPECT_EQ(node.writer_gid_seq_._length, 2u);
+  dds_return_loan(r, samples, 1);
+}
+
 void play_and_compare(Qos scan_qos, const char* name) {
   SCOPED_TRACE(name);
   ::setenv("CYCLONEDDS_URI", kLoopback, 1);
@@ -117,15 +204,16 @@ void play_and_compare(Qos scan_qos, const char* name) {
   // The scan topic of this process alone: the live tests run side by side may share a domain.
   const std::string scan_topic = "/scan_p" + std::to_string(::getpid());
   const std::string params =
-      "dispel_filter:\n  ros__parameters:\n    static_sensor: true\n    scale_to_scanner: true\n"
-      "    scan_topic: " +
+      "/**:\n  ros__parameters:\n    static_sensor: true\n    scale_to_scanner: true\n"
+      "    ros_distro: humble\n    scan_topic: " +
       scan_topic + "\n";
   pipeline::ScanFilterRunnerOptions options;
   options.config = io::parse_filter_config("{}", "defaults");
   options.scale_to_scanner = true;
   pipeline::ScanFilterRunner reference(options);
 
-  NodeProcess node(params, domain);
+  const std::string node_name = "dispel_filter_p" + std::to_string(::getpid());
+  NodeProcess node(params, node_name, domain);
   Participant test(domain);
   Writer driver(test, scan_topic, "sensor_msgs/msg/LaserScan", scan_qos);
   Reader filtered(test, scan_topic + "_filtered", "sensor_msgs/msg/LaserScan", Qos::defaults());
@@ -141,6 +229,8 @@ void play_and_compare(Qos scan_qos, const char* name) {
            log.find(scan_topic + "_filtered: 1 subscribers matched") != std::string::npos &&
            log.find(scan_topic + "_labels: 1 subscribers matched") != std::string::npos;
   })) << node.log();
+
+  check_graph(test, node_name, driver, filtered, labels);
 
   std::int64_t removed = 0;
   std::vector<double> round_trip_ms;  // Printed, not asserted: times belong in benchmarks.

@@ -87,12 +87,25 @@ struct Matches {
   std::string last_incompatible_policy;  ///< The QoS policy that failed last ("" when none).
 };
 
+/// A topic by its DDS names, as they go on the wire (ROS 2's own ros_discovery_info has no
+/// "rt" prefix).
+struct DdsTopic {
+  std::string name;  ///< "rt/scan", "ros_discovery_info"
+  std::string type;  ///< "sensor_msgs::msg::dds_::LaserScan_"
+  /// A ROS 2 topic of a ROS 2 message type, by dds_topic_name() and dds_type_name().
+  static DdsTopic ros(const std::string& ros_topic, const std::string& ros_type) {
+    return {dds_topic_name(ros_topic), dds_type_name(ros_type)};
+  }
+};
+
 /// A writer of one ROS 2 topic.
 class Writer {
  public:
   /// @throws DdsError (a name, a topic of the same name and another type, a QoS DDS refuses).
   Writer(Participant& participant, const std::string& ros_topic, const std::string& ros_type,
-         const Qos& qos);
+         const Qos& qos)
+      : Writer(participant, DdsTopic::ros(ros_topic, ros_type), qos) {}
+  Writer(Participant& participant, const DdsTopic& topic, const Qos& qos);
   ~Writer();
   Writer(const Writer&) = delete;
   Writer& operator=(const Writer&) = delete;
@@ -103,6 +116,8 @@ class Writer {
   /// The readers matched, and those whose QoS this writer cannot offer.
   Matches matches() const;
   std::array<std::uint8_t, 16> guid() const;
+  /// The DDS writer (dds_entity_t), for what this class does not wrap.
+  std::int32_t handle() const { return writer_; }
 
  private:
   std::int32_t topic_ = 0, writer_ = 0;
@@ -114,7 +129,9 @@ class Reader {
  public:
   /// @throws DdsError as Writer's.
   Reader(Participant& participant, const std::string& ros_topic, const std::string& ros_type,
-         const Qos& qos);
+         const Qos& qos)
+      : Reader(participant, DdsTopic::ros(ros_topic, ros_type), qos) {}
+  Reader(Participant& participant, const DdsTopic& topic, const Qos& qos);
   ~Reader();
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
@@ -125,6 +142,8 @@ class Reader {
   /// The writers matched, and those that cannot offer this reader's QoS.
   Matches matches() const;
   std::array<std::uint8_t, 16> guid() const;
+  /// The DDS reader (dds_entity_t), for what this class does not wrap.
+  std::int32_t handle() const { return reader_; }
 
  private:
   std::int32_t topic_ = 0, reader_ = 0, waitset_ = 0, condition_ = 0;

@@ -28,6 +28,9 @@ struct FilterNodeSettings {
   double transform_timeout_s = 0.1;     ///< Longest wait for the sensor pose at a scan's stamp.
   bool drop_without_transform = false;  ///< Else published unfiltered.
   int queue_size = 10;                  ///< Scans waiting for their pose, at most.
+  /// The ROS 2 distribution whose graph layout (gid size) ros_discovery_info uses; empty: the
+  /// environment's ROS_DISTRO, else humble.
+  std::string ros_distro;
   pipeline::ScanFilterRunnerOptions runner;
 };
 

@@ -82,6 +82,9 @@ TEST(Ros2FilterNodeParameters, TheShippedParameterFileStatesTheDefaults) {
   EXPECT_EQ(s.queue_size, d.queue_size);
   EXPECT_EQ(s.runner.scale_to_scanner, d.runner.scale_to_scanner);
   EXPECT_EQ(s.runner.scan_period_s, d.runner.scan_period_s);
+  EXPECT_EQ(s.ros_distro, d.ros_distro);
+  EXPECT_EQ(parse_error("ros_distro: noetic\n"),
+            "p.yaml: ros_distro 'noetic' is not humble, iron, jazzy, kilted or rolling");
 }
 
 // A laser 0.2 m ahead of base_link in a 6 m round room, 360 beams.

@@ -1,20 +1,23 @@
 #!/usr/bin/env node
 // Validates a rosbag2-style ROS 2 MCAP file with @mcap/core and @foxglove/rosmsg2-serialization.
 //
-// usage: node check_mcap.mjs IN.mcap [--jsonl OUT.jsonl]
+// usage: node check_mcap.mjs IN.mcap [--jsonl OUT.jsonl] [--reencode]
 //
 // (a) McapStreamReader over the whole file (validateCrcs), every record, footer reached;
 // (b) McapIndexedReader: summary, chunk indexes, statistics vs messages read, readMessages()
 //     in log-time order, each chunk's message indexes against the chunk's contents,
 //     data-section and summary CRCs when present;
 // (c) profile "ros2", schema encoding "ros2msg", message encoding "cdr", offered_qos_profiles;
-// (d) every message decoded with MessageReader built from @foxglove/rosmsg parse(text, {ros2: true}).
+// (d) every message decoded with MessageReader built from @foxglove/rosmsg parse(text, {ros2: true});
+// (e) with --reencode, every little-endian message serialised again from its decoded values with
+//     rosmsg2-serialization's MessageWriter must be the same bytes (the golden bytes of the writer
+//     that made the file: dispel's CDR encoder, the one dispel-ros2 publishes with).
 // Exit 0 with a one-line summary, or 1 with "FAIL ...: reason".
 import fs from "node:fs";
 import zlib from "node:zlib";
 import { McapIndexedReader, McapStreamReader, MCAP_MAGIC } from "@mcap/core";
 import { parse as parseMsgDef } from "@foxglove/rosmsg";
-import { MessageReader } from "@foxglove/rosmsg2-serialization";
+import { MessageReader, MessageWriter } from "@foxglove/rosmsg2-serialization";
 import zstd from "@foxglove/wasm-zstd";
 import lz4 from "@foxglove/wasm-lz4";
 import { jsonlLine } from "./jsonl.mjs";
@@ -22,11 +25,13 @@ import { jsonlLine } from "./jsonl.mjs";
 const args = process.argv.slice(2);
 let input;
 let jsonlOut;
+let reencode = false;
 for (let i = 0; i < args.length; i++) {
   if (args[i] === "--jsonl" && i + 1 < args.length) jsonlOut = args[++i];
+  else if (args[i] === "--reencode") reencode = true;
   else if (!args[i].startsWith("-") && input === undefined) input = args[i];
   else {
-    console.error("usage: node check_mcap.mjs IN.mcap [--jsonl OUT.jsonl]");
+    console.error("usage: node check_mcap.mjs IN.mcap [--jsonl OUT.jsonl] [--reencode]");
     process.exit(2);
   }
 }
@@ -326,9 +331,13 @@ async function main() {
 
   // ---------- (b, d) readMessages in log-time order, decode everything ----------
   const decoders = new Map();
+  const encoders = new Map();
+  const reencoded = new Map();  // schema name -> messages re-encoded to the same bytes
   for (const s of reader.schemasById.values()) {
     try {
-      decoders.set(s.id, new MessageReader(parseMsgDef(new TextDecoder().decode(s.data), { ros2: true })));
+      const defs = parseMsgDef(new TextDecoder().decode(s.data), { ros2: true });
+      decoders.set(s.id, new MessageReader(defs));
+      encoders.set(s.id, new MessageWriter(defs));
     } catch (e) {
       throw new CheckError(`schema ${s.name}: cannot parse ros2msg definition: ${e.message}`);
     }
@@ -364,6 +373,16 @@ async function main() {
       }
       const trailing = m.data.length - dec.lastReadByteLength();
       check(trailing <= 3, `${where}: ${trailing} bytes left after decoding as ${schema.name}`);
+      if (reencode && m.data[1] === 1) {
+        const again = encoders.get(ch.schemaId).writeMessage(msg);
+        const n = Math.min(again.length, m.data.length);
+        let at = 0;
+        while (at < n && again[at] === m.data[at]) at++;
+        check(at === again.length && at === m.data.length,
+          () => `${where}: serialised again by rosmsg2-serialization, ${again.length} bytes that differ ` +
+            `from the file's ${m.data.length} at byte ${at}`);
+        reencoded.set(schema.name, (reencoded.get(schema.name) ?? 0) + 1);
+      }
       if (jsonlOut) lines.push(jsonlLine(ch.topic, m.logTime, schema.name, msg));
     }
   } catch (e) {
@@ -406,7 +425,8 @@ async function main() {
     `OK ${input}: ${total} messages, ${reader.channelsById.size} channels, ${reader.chunkIndexes.length} chunks ` +
       `(compression: ${[...chunkCompressions].join(",") || "-"}${chunksOverlap ? ", overlapping" : ""}), ` +
       `CRCs: chunk ${chunkCrcs}/${reader.chunkIndexes.length}, data ${dataCrc}, summary ${summaryCrc}; ` +
-      `library "${reader.header.library}"; ${bigEndian ? `${bigEndian} big-endian CDR; ` : ""}${topics}`,
+      `library "${reader.header.library}"; ${bigEndian ? `${bigEndian} big-endian CDR; ` : ""}${topics}` +
+      (reencode ? `; the same bytes serialised again: ${[...reencoded].map(([k, v]) => `${k}=${v}`).join(" ")}` : ""),
   );
 }
 

@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,27 @@ int run_filter(const ros2::FilterNodeSettings& settings) {
                         ros2::Qos::defaults());
   ros2::Writer labels(participant, settings.scan_topic + "_labels", scan_type,
                       ros2::Qos::defaults());
+  // use_sim_time: ROS time is /clock's (ROS 2's clock QoS: best effort, keep last 1).
+  std::optional<ros2::Reader> clock;
+  if (settings.use_sim_time) {
+    clock.emplace(
+        participant, "/clock", "rosgraph_msgs/msg/Clock",
+        ros2::Qos{ros2::Qos::Reliability::kBestEffort, ros2::Qos::Durability::kVolatile, 1});
+  }
+  double sim_time_s = 0.0;
+  const auto ros_time_s = [&] {
+    if (clock) {
+      for (const auto& bytes : clock->take(0.0)) {
+        try {
+          sim_time_s = ros2::decode_clock(bytes);
+        } catch (const io::CdrError&) {
+        }
+      }
+      return sim_time_s;
+    }
+    return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  };
   ros2::FilterNodeCore core(settings);
 
   // The node in ROS 2's graph (ros2 node list), in the layout of the robot's distribution.
@@ -159,7 +181,7 @@ int run_filter(const ros2::FilterNodeSettings& settings) {
         core.count_undecodable();
         continue;
       }
-      publish(core.scan(message, steady_seconds()));
+      publish(core.scan(std::move(message), steady_seconds(), ros_time_s()));
     }
     const double now_s = steady_seconds();
     publish(core.poll(now_s));
@@ -173,12 +195,14 @@ int run_filter(const ros2::FilterNodeSettings& settings) {
   std::fprintf(stderr,
                "dispel-ros2 filter: %lld scans in, %lld published (%lld filtered, %lld without "
                "a pose), %lld dropped without a transform, %lld dropped from a full queue, %lld "
-               "undecodable messages, %lld transforms refused\n",
+               "undecodable messages, %lld transforms refused, %lld times time went backwards, "
+               "%lld scans without a stamp\n",
                static_cast<long long>(c.scans_in), static_cast<long long>(c.published),
                static_cast<long long>(r.filtered), static_cast<long long>(r.no_pose),
                static_cast<long long>(c.dropped_without_transform),
                static_cast<long long>(c.dropped_queue_full), static_cast<long long>(c.undecodable),
-               static_cast<long long>(c.transforms_refused));
+               static_cast<long long>(c.transforms_refused), static_cast<long long>(c.time_resets),
+               static_cast<long long>(c.zero_stamps));
   return 0;
 }
 

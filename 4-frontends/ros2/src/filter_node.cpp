@@ -8,6 +8,7 @@
 
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/errors.hpp"
+#include "dispel/io/ros2_messages.hpp"
 #include "dispel/io/text.hpp"
 #include "dispel/ros2/graph.hpp"
 
@@ -84,13 +85,7 @@ void read_node_keys(YAML::Node& p, FilterNodeSettings& s, const std::string& ori
   }
   boolean("scale_to_scanner", s.runner.scale_to_scanner);
   number("scan_period_s", s.runner.scan_period_s, 0.0, "a finite number >= 0 (0: from the scans)");
-  for (const char* ros_only : {"use_sim_time"}) {
-    bool ignored = false;
-    boolean(ros_only, ignored);
-    if (ignored) {
-      throw io::ConfigError(origin + ": use_sim_time is not supported yet (docs/ros2.md)");
-    }
-  }
+  boolean("use_sim_time", s.use_sim_time);
 }
 
 }  // namespace
@@ -147,7 +142,14 @@ void FilterNodeCore::transforms(const io::TransformsMessage& message, bool is_st
     const std::string child = io::FrameTree::normalise(t.child);
     if (!is_static && parent == settings_.fixed_frame) {
       auto it = motion_.try_emplace(child, kPoseToleranceS, kPoseMaxGapS).first;
-      if (!it->second.add(t.stamp.seconds(), t.child_in_parent)) ++counts_.transforms_refused;
+      const double stamp_s = t.stamp.seconds();
+      if (!it->second.empty() && stamp_s < it->second.poses().back().stamp_s - kTimeJumpS) {
+        // Time went backwards: the motion known belongs to another run. Forgotten, so that the
+        // new one is taken (a PoseBuffer refuses what is not after its last pose).
+        for (auto& [robot, poses] : motion_) poses = PoseBuffer(kPoseToleranceS, kPoseMaxGapS);
+        ++counts_.time_resets;
+      }
+      if (!it->second.add(stamp_s, t.child_in_parent)) ++counts_.transforms_refused;
       continue;
     }
     const Pose2& p = t.child_in_parent;
@@ -187,9 +189,14 @@ FilterNodeOutput FilterNodeCore::run(const io::ScanMessage& message,
           runner_.last_outcome()};
 }
 
-std::vector<FilterNodeOutput> FilterNodeCore::scan(const io::ScanMessage& message, double now_s) {
+std::vector<FilterNodeOutput> FilterNodeCore::scan(io::ScanMessage message, double now_s,
+                                                   double ros_time_s) {
   ++counts_.scans_in;
-  waiting_.push_back({message, now_s});
+  if (message.header.stamp.is_zero()) {  // A driver without a clock: the time it came.
+    message.scan.stamp_s = ros_time_s;
+    ++counts_.zero_stamps;
+  }
+  waiting_.push_back({std::move(message), now_s});
   std::vector<FilterNodeOutput> out = poll(now_s);
   // Still more waiting than the queue holds: the oldest go, filtered without a pose or dropped
   // (a robot whose odometry stopped must not make the node queue without bound).
@@ -225,6 +232,26 @@ std::vector<FilterNodeOutput> FilterNodeCore::poll(double now_s) {
     for (auto& [robot, poses] : motion_) poses.forget_before(out.back().filtered.scan.stamp_s);
   }
   return out;
+}
+
+double decode_clock(const std::vector<std::uint8_t>& cdr) {
+  // The encapsulation header, then builtin_interfaces/Time: int32 sec, uint32 nanosec.
+  if (cdr.size() < 12 || cdr[0] != 0 || cdr[1] > 1) {
+    throw io::CdrError("a /clock message is not rosgraph_msgs/Clock in CDR (" +
+                       std::to_string(cdr.size()) + " bytes)");
+  }
+  const bool little = cdr[1] == 1;
+  const auto u32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    for (std::size_t k = 0; k < 4; ++k) {
+      v |= static_cast<std::uint32_t>(cdr[at + (little ? k : 3 - k)]) << (8 * k);
+    }
+    return v;
+  };
+  const auto sec = static_cast<std::int32_t>(u32(4));
+  const std::uint32_t nanosec = u32(8);
+  if (nanosec >= 1000000000U) throw io::CdrError("a /clock message has nanosec >= 1e9");
+  return static_cast<double>(sec) + 1e-9 * static_cast<double>(nanosec);
 }
 
 }  // namespace dispel::ros2

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "dispel/io/errors.hpp"
+#include "dispel/io/ros2_messages.hpp"
 #include "test_files.hpp"
 
 namespace dispel::ros2 {
@@ -61,8 +62,7 @@ TEST(Ros2FilterNodeParameters, Ros2sLayoutFlatFilesAndTheFiltersKeys) {
             "p.yaml: on_missing_transform must be publish_unfiltered or drop (got 'wait')");
   EXPECT_EQ(parse_error("transform_timeout_s: .nan\n"),
             "p.yaml: transform_timeout_s must be a finite number >= 0 (got '.nan')");
-  EXPECT_EQ(parse_error("use_sim_time: true\n"),
-            "p.yaml: use_sim_time is not supported yet (docs/ros2.md)");
+  EXPECT_TRUE(parse_filter_node_parameters("use_sim_time: true\n", "p", "n").use_sim_time);
   EXPECT_NE(parse_error("no_such_key: 1\n").find("no_such_key"), std::string::npos);
   EXPECT_EQ(parse_error("- a list\n"), "p.yaml: must be a mapping of parameters");
   EXPECT_NE(parse_error("a: [\n").find("p.yaml: not YAML"), std::string::npos);
@@ -83,6 +83,7 @@ TEST(Ros2FilterNodeParameters, TheShippedParameterFileStatesTheDefaults) {
   EXPECT_EQ(s.runner.scale_to_scanner, d.runner.scale_to_scanner);
   EXPECT_EQ(s.runner.scan_period_s, d.runner.scan_period_s);
   EXPECT_EQ(s.ros_distro, d.ros_distro);
+  EXPECT_EQ(s.use_sim_time, d.use_sim_time);
   EXPECT_EQ(parse_error("ros_distro: noetic\n"),
             "p.yaml: ros_distro 'noetic' is not humble, iron, jazzy, kilted or rolling");
 }
@@ -116,7 +117,7 @@ TEST(Ros2FilterNodeCore, AScanWaitsForItsPoseFromTfAndItsMountFromTfStatic) {
   core.transforms(transform(0.0, "base_link", "laser", {0.2, 0.0, 0.0}), true);
   core.transforms(transform(99.9, "odom", "base_link", {1.0, 0.0, 0.0}), false);
   // The scan at t = 100 is after the last pose (99.9, beyond the tolerance): it waits.
-  EXPECT_TRUE(core.scan(room_scan(100.0), 1000.0).empty());
+  EXPECT_TRUE(core.scan(room_scan(100.0), 1000.0, 0.0).empty());
   EXPECT_TRUE(core.poll(1000.1).empty());
   core.transforms(transform(100.1, "/odom", "/base_link", {2.0, 0.0, 0.0}), false);
   const std::vector<FilterNodeOutput> out = core.poll(1000.2);
@@ -133,7 +134,7 @@ TEST(Ros2FilterNodeCore, WithoutAPoseInTimeAScanIsPublishedUnfilteredOrDropped) 
     s.transform_timeout_s = 0.1;
     s.drop_without_transform = drop;
     FilterNodeCore core(s);
-    EXPECT_TRUE(core.scan(room_scan(5.0), 10.0).empty());
+    EXPECT_TRUE(core.scan(room_scan(5.0), 10.0, 0.0).empty());
     EXPECT_TRUE(core.poll(10.05).empty());
     const std::vector<FilterNodeOutput> out = core.poll(10.11);
     if (drop) {
@@ -158,9 +159,9 @@ TEST(Ros2FilterNodeCore, ScansThatCanNeverHaveAPoseGoAtOnceAndTheQueueIsBounded)
   FilterNodeCore core(s);
   core.transforms(transform(0.0, "base_link", "laser", {}), true);
   core.transforms(transform(50.0, "odom", "base_link", {}), false);
-  const std::vector<FilterNodeOutput> early = core.scan(room_scan(40.0), 1.0);
+  const std::vector<FilterNodeOutput> early = core.scan(room_scan(40.0), 1.0, 0.0);
   ASSERT_EQ(early.size(), 1u);
-  for (int k = 0; k < 5; ++k) EXPECT_TRUE(core.scan(room_scan(60.0 + k), 2.0).empty());
+  for (int k = 0; k < 5; ++k) EXPECT_TRUE(core.scan(room_scan(60.0 + k), 2.0, 0.0).empty());
   EXPECT_EQ(core.counts().dropped_queue_full, 2);
   core.transforms(transform(70.0, "odom", "base_link", {}), false);
   EXPECT_EQ(core.poll(2.1).size(), 3u);  // 62, 63, 64: interpolated.
@@ -172,11 +173,57 @@ TEST(Ros2FilterNodeCore, ScansThatCanNeverHaveAPoseGoAtOnceAndTheQueueIsBounded)
   EXPECT_EQ(core.counts().transforms_refused, 2);
 }
 
+// A recording played again (ros2 bag play --loop, /clock reset): the transforms from the fixed
+// frame jump back. The motion of the earlier run is forgotten, so the new run's poses are taken
+// (a PoseBuffer refuses what is not after its last pose); a transform a little out of order is
+// refused, not taken for a new run.
+TEST(Ros2FilterNodeCore, TimeGoingBackwardsStartsTheMotionAfresh) {
+  FilterNodeCore core(FilterNodeSettings{});
+  core.transforms(transform(0.0, "base_link", "laser", {}), true);
+  for (int k = 0; k <= 10; ++k)
+    core.transforms(transform(100.0 + k, "odom", "base_link", {}), false);
+  core.transforms(transform(109.5, "odom", "base_link", {}), false);  // Out of order.
+  EXPECT_EQ(core.counts().transforms_refused, 1);
+  EXPECT_EQ(core.counts().time_resets, 0);
+  core.transforms(transform(100.0, "odom", "base_link", {1.0, 0.0, 0.0}), false);
+  core.transforms(transform(101.0, "odom", "base_link", {2.0, 0.0, 0.0}), false);
+  EXPECT_EQ(core.counts().time_resets, 1);
+  EXPECT_EQ(core.counts().transforms_refused, 1);  // The new run's are taken.
+  const std::vector<FilterNodeOutput> out = core.scan(room_scan(100.5), 0.0, 0.0);
+  ASSERT_EQ(out.size(), 1u);  // Its pose is the new run's.
+  EXPECT_EQ(out[0].outcome, pipeline::ScanOutcome::kFiltered);
+}
+
+// A driver without a clock leaves the stamp zero: the scan is filtered at the ROS time it came
+// (the system's, or /clock's), and published with its own header.
+TEST(Ros2FilterNodeCore, AScanWithoutAStampIsFilteredAtTheTimeItCame) {
+  FilterNodeSettings s;
+  s.static_sensor = true;
+  FilterNodeCore core(s);
+  io::ScanMessage zero = room_scan(0.0);
+  const std::vector<FilterNodeOutput> out = core.scan(zero, 5.0, 1700000000.5);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].filtered.scan.stamp_s, 1700000000.5);
+  EXPECT_TRUE(out[0].filtered.header.stamp.is_zero());
+  EXPECT_EQ(core.counts().zero_stamps, 1);
+}
+
+TEST(Ros2FilterNode, ClockMessagesDecode) {
+  // rosgraph_msgs/Clock: little-endian, 1700000000 s and 250000000 ns.
+  const std::vector<std::uint8_t> le = {0, 1, 0, 0, 0x00, 0xf1, 0x53, 0x65, 0x80, 0xb2, 0xe6, 0x0e};
+  EXPECT_DOUBLE_EQ(decode_clock(le), 1700000000.25);
+  std::vector<std::uint8_t> be = {0, 0, 0, 0, 0x65, 0x53, 0xf1, 0x00, 0x0e, 0xe6, 0xb2, 0x80};
+  EXPECT_DOUBLE_EQ(decode_clock(be), 1700000000.25);
+  EXPECT_THROW(decode_clock({0, 1, 0, 0, 1}), io::CdrError);
+  be[8] = 0xff;  // nanosec >= 1e9.
+  EXPECT_THROW(decode_clock(be), io::CdrError);
+}
+
 TEST(Ros2FilterNodeCore, AStaticSensorNeedsNoTransforms) {
   FilterNodeSettings s;
   s.static_sensor = true;
   FilterNodeCore core(s);
-  const std::vector<FilterNodeOutput> out = core.scan(room_scan(1.0), 0.0);
+  const std::vector<FilterNodeOutput> out = core.scan(room_scan(1.0), 0.0, 0.0);
   ASSERT_EQ(out.size(), 1u);
   EXPECT_EQ(out[0].outcome, pipeline::ScanOutcome::kFiltered);
 }

@@ -27,6 +27,7 @@ struct FilterNodeSettings {
   bool static_sensor = false;           ///< The sensor does not move: identity pose, no TF.
   double transform_timeout_s = 0.1;     ///< Longest wait for the sensor pose at a scan's stamp.
   bool drop_without_transform = false;  ///< Else published unfiltered.
+  bool use_sim_time = false;            ///< ROS time from /clock (a recording played).
   int queue_size = 10;                  ///< Scans waiting for their pose, at most.
   /// The ROS 2 distribution whose graph layout (gid size) ros_discovery_info uses; empty: the
   /// environment's ROS_DISTRO, else humble.
@@ -56,7 +57,18 @@ struct FilterNodeCounts {
   std::int64_t dropped_queue_full = 0;         ///< The oldest waiting scan, for a newer one.
   std::int64_t transforms_refused = 0;         ///< Not finite, or not after the last one.
   std::int64_t undecodable = 0;                ///< Messages the CDR decoders refused.
+  /// The robot's motion forgotten: a transform from the fixed frame more than kTimeJumpS before
+  /// the last one (a recording played again, /clock reset).
+  std::int64_t time_resets = 0;
+  std::int64_t zero_stamps = 0;  ///< Scans without a stamp, given the time they came.
 };
+
+/// An earlier transform than the last by more than this is time going backwards (s); less is
+/// transforms out of order, refused.
+constexpr double kTimeJumpS = 1.0;
+
+/// rosgraph_msgs/Clock in CDR: its time in seconds. @throws io::CdrError when it is not one.
+double decode_clock(const std::vector<std::uint8_t>& cdr);
 
 class FilterNodeCore {
  public:
@@ -67,9 +79,11 @@ class FilterNodeCore {
   /// frame are the robot's motion (kept in time); the others are mounts (the latest counts).
   void transforms(const io::TransformsMessage& message, bool is_static);
 
-  /// A scan, received at @p now_s (a steady clock, seconds): it waits for its pose with the
+  /// A scan, received at @p now_s (a steady clock, seconds) and at @p ros_time_s (ROS time:
+  /// the system clock, or /clock under use_sim_time), which a scan without a stamp is filtered at
+  /// (the header it is published with keeps its zero stamp). It waits for its pose with the
   /// others. Returns what is ready to publish, in the scans' order.
-  std::vector<FilterNodeOutput> scan(const io::ScanMessage& message, double now_s);
+  std::vector<FilterNodeOutput> scan(io::ScanMessage message, double now_s, double ros_time_s);
 
   /// What is ready at @p now_s: scans whose pose is known, or whose wait ran out.
   std::vector<FilterNodeOutput> poll(double now_s);

@@ -58,6 +58,26 @@ std::map<std::string, std::vector<std::pair<Stamp, std::string>>> read_all(
   return seen;
 }
 
+// The error opening the log at @p path gives, or "read".
+std::string open_error(const std::string& path) {
+  try {
+    MrptRawlogReader reader(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "read";
+}
+
+// @p bytes with the action object whose class name is at @p at made MRPT's abstract
+// "mrpt::obs::CAction" (NUL-padded to the same length: MRPT takes the name as a C string) with
+// no fields: the byte after its version ends it.
+std::string abstract_action_at(std::string bytes, std::size_t at) {
+  const std::size_t length = std::string("mrpt::obs::CActionRobotMovement2D").size();
+  bytes.replace(at, length, std::string("mrpt::obs::CAction") + std::string(15, '\0'));
+  bytes[at + length + 1] = '\x88';
+  return bytes;
+}
+
 // Observations only (the newer format): two lasers, absolute odometry, a comment, all in one
 // gzip-compressed file, the second laser's observations given out of time order.
 TEST(MrptRawlogSynthetic, ObservationsFormatWithLabelledLeftToRightLasers) {
@@ -188,16 +208,10 @@ TEST(MrptRawlogSynthetic, ContainerCountCheckedUnderMrpt2sFullClassName) {
   ASSERT_NO_THROW(MrptRawlogReader{path});
   bytes.replace(header.size(), 4, "\xff\xff\xff\xff");
   test::write_text("full_name.rawlog", bytes);
-  try {
-    MrptRawlogReader reader(path);
-    FAIL() << "read";
-  } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()),
-              path +
-                  ": not a readable MRPT rawlog (a CSensoryFrame of 4294967295 observations in "
-                  "the " +
-                  std::to_string(bytes.size() - header.size() - 4) + " bytes left)");
-  }
+  EXPECT_EQ(open_error(path),
+            path +
+                ": not a readable MRPT rawlog (a CSensoryFrame of 4294967295 observations in the " +
+                std::to_string(bytes.size() - header.size() - 4) + " bytes left)");
 }
 
 // MRPT reads a CActionCollection's actions into pointers it copies through: an action it cannot
@@ -234,28 +248,16 @@ TEST(MrptRawlogSynthetic, ActionsMrptCannotMakeAreRefused) {
   const std::size_t first = bytes.find(name);
   const std::size_t second = bytes.find(name, first + 1);
   ASSERT_NE(second, std::string::npos);
-  const auto make_abstract = [&](std::string b, std::size_t at) {
-    b.replace(at, name.size(), std::string("mrpt::obs::CAction") + std::string(15, '\0'));
-    b[at + name.size() + 1] = '\x88';  // The end of the object, after its version.
-    return b;
-  };
-  const auto error = [&](const std::string& b) {
-    test::write_text("abstract_action.rawlog", b);
-    try {
-      MrptRawlogReader reader(path);
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("read");
-  };
-  EXPECT_EQ(error(make_abstract(bytes, second)),
-            path +
-                ": not a readable MRPT rawlog (truncated or corrupt after 1 objects: action 1 of "
-                "a CActionCollection is 'CAction', not an action MRPT can make)");
-  EXPECT_EQ(error(make_abstract(bytes, first)),
-            path +
-                ": not a readable MRPT rawlog (truncated or corrupt after 1 objects: action 0 of "
-                "a CActionCollection is 'CAction', not an action MRPT can make)");
+  for (const auto& [at, k] : {std::pair{second, 1}, std::pair{first, 0}}) {
+    const std::string changed = test::write_text("abstract_" + std::to_string(k) + ".rawlog",
+                                                 abstract_action_at(bytes, at));
+    EXPECT_EQ(open_error(changed),
+              changed +
+                  ": not a readable MRPT rawlog (truncated or corrupt after 1 objects: action " +
+                  std::to_string(k) +
+                  " of a CActionCollection is 'CAction', not an action MRPT can "
+                  "make)");
+  }
 }
 
 // A whole CRawlog saved as one object: its entries are read as the log's own (the collection in
@@ -294,29 +296,18 @@ TEST(MrptRawlogSynthetic, AWholeCRawlogIsReadAsTheLogsOwnEntries) {
     EXPECT_NEAR(odometry[2].pose.x_m, 2.0, 1e-9) << depth;
   }
   const std::string deep = nested(9);
-  try {
-    MrptRawlogReader reader(deep);
-    FAIL() << "read";
-  } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()),
-              deep + ": not a readable MRPT rawlog (CRawlogs nested more than 8 deep)");
-  }
-  std::string bytes = test::read_bytes(nested(1));
+  EXPECT_EQ(open_error(deep),
+            deep + ": not a readable MRPT rawlog (CRawlogs nested more than 8 deep)");
+  const std::string bytes = test::read_bytes(nested(1));
   const std::string name = "mrpt::obs::CActionRobotMovement2D";
   const std::size_t second = bytes.find(name, bytes.find(name) + 1);
   ASSERT_NE(second, std::string::npos);
-  bytes.replace(second, name.size(), std::string("mrpt::obs::CAction") + std::string(15, '\0'));
-  bytes[second + name.size() + 1] = '\x88';
-  const std::string abstract = test::write_text("whole_abstract.rawlog", bytes);
-  try {
-    MrptRawlogReader reader(abstract);
-    FAIL() << "read";
-  } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()),
-              abstract +
-                  ": not a readable MRPT rawlog (action 1 of a CActionCollection is 'CAction', "
-                  "not an action MRPT can make)");
-  }
+  const std::string abstract =
+      test::write_text("whole_abstract.rawlog", abstract_action_at(bytes, second));
+  EXPECT_EQ(open_error(abstract),
+            abstract +
+                ": not a readable MRPT rawlog (action 1 of a CActionCollection is 'CAction', not "
+                "an action MRPT can make)");
 }
 
 }  // namespace

@@ -16,9 +16,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <functional>
-#include <thread>
 
+#include "cyclone_test_support.hpp"
 #include "dispel/io/ros2_messages.hpp"
 #include "dispel/ros2/graph.hpp"
 #include "rmw_dds_common_humble.h"
@@ -30,16 +29,8 @@ namespace {
 using io::ScanMessage;
 using io::Stamp;
 
-constexpr double kWaitS = 20.0;
-
-bool eventually(const std::function<bool()>& condition) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
-  while (!condition()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return true;
-}
+using cyclone_test::eventually;
+using cyclone_test::typed_reader;
 
 int test_domain() { return 100 + static_cast<int>(::getpid() % 100); }
 
@@ -111,15 +102,8 @@ TEST_F(Ros2Dds, RawCdrIsWhatCyclonesTypeFromTheRos2IdlReads) {
   Participant theirs(test_domain());
   Writer writer(ours, own("/scan"), "sensor_msgs/msg/LaserScan", Qos::defaults());
   Reader raw(ours, own("/scan"), "sensor_msgs/msg/LaserScan", Qos::sensor_data());
-  const dds_entity_t topic =
-      dds_create_topic(theirs.handle(), &sensor_msgs_msg_dds__LaserScan__desc,
-                       ("rt" + own("/scan")).c_str(), nullptr, nullptr);
-  ASSERT_GT(topic, 0);
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-  dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
-  const dds_entity_t typed = dds_create_reader(theirs.handle(), topic, qos, nullptr);
-  dds_delete_qos(qos);
+  const dds_entity_t typed =
+      typed_reader(theirs, &sensor_msgs_msg_dds__LaserScan__desc, "rt" + own("/scan"), false);
   ASSERT_GT(typed, 0);
   ASSERT_TRUE(eventually([&] { return writer.matches().current == 2; }))
       << writer.matches().current;
@@ -257,16 +241,8 @@ TEST_F(Ros2Dds, TheGraphSampleIsWhatRos2sGraphTypeReads) {
   Writer graph(ours, DdsTopic{topic, discovery_topic().type}, discovery_qos());
   graph.write(encode_participant_entities(participant, {node}, GidLayout::kHumble));
   // Transient local: a reader that comes later gets it, as ROS 2's tools do.
-  const dds_entity_t t =
-      dds_create_topic(theirs.handle(), &rmw_dds_common_msg_dds__ParticipantEntitiesInfo__desc,
-                       topic.c_str(), nullptr, nullptr);
-  ASSERT_GT(t, 0);
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-  dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
-  dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
-  const dds_entity_t r = dds_create_reader(theirs.handle(), t, qos, nullptr);
-  dds_delete_qos(qos);
+  const dds_entity_t r =
+      typed_reader(theirs, &rmw_dds_common_msg_dds__ParticipantEntitiesInfo__desc, topic, true);
   ASSERT_GT(r, 0);
   void* samples[1] = {nullptr};
   dds_sample_info_t info[1];

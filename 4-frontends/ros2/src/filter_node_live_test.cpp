@@ -27,10 +27,9 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <functional>
 #include <sstream>
-#include <thread>
 
+#include "cyclone_test_support.hpp"
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/ros2_messages.hpp"
 #include "dispel/jobs/job.hpp"
@@ -43,7 +42,8 @@
 namespace dispel::ros2 {
 namespace {
 
-constexpr double kWaitS = 20.0;
+using cyclone_test::eventually;
+using cyclone_test::kWaitS;
 // Unicast discovery on the loopback (no multicast: CI machines may have none), ports of up to
 // 20 participants; nothing leaves the machine.
 constexpr const char* kLoopback =
@@ -51,15 +51,6 @@ constexpr const char* kLoopback =
     "<AllowMulticast>false</AllowMulticast></General><Discovery><Peers><Peer "
     "address=\"127.0.0.1\"/></Peers><ParticipantIndex>auto</ParticipantIndex>"
     "<MaxAutoParticipantIndex>20</MaxAutoParticipantIndex></Discovery>";
-
-bool eventually(const std::function<bool()>& condition) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
-  while (!condition()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  return true;
-}
 
 std::vector<io::ScanMessage> recorded_scans() {
   auto reader = jobs::open_recording(
@@ -130,16 +121,8 @@ bool listed(const rmw_dds_common_msg_dds__Gid_* gids, std::uint32_t n, const Gui
 // as DDS discovery gave them to the test), under its participant's gid.
 void check_graph(Participant& test, const std::string& node_name, Writer& driver, Reader& filtered,
                  Reader& labels) {
-  const dds_entity_t t =
-      dds_create_topic(test.handle(), &rmw_dds_common_msg_dds__ParticipantEntitiesInfo__desc,
-                       "ros_discovery_info", nullptr, nullptr);
-  ASSERT_GT(t, 0);
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
-  dds_qset_durability(qos, DDS_DURABILITY_TRANSIENT_LOCAL);
-  dds_qset_history(qos, DDS_HISTORY_KEEP_ALL, 0);
-  const dds_entity_t r = dds_create_reader(test.handle(), t, qos, nullptr);
-  dds_delete_qos(qos);
+  const dds_entity_t r = cyclone_test::typed_reader(
+      test, &rmw_dds_common_msg_dds__ParticipantEntitiesInfo__desc, "ros_discovery_info", true);
   ASSERT_GT(r, 0);
   // Another process's node may share the domain (tests run side by side): this one's sample is
   // the one with its name.

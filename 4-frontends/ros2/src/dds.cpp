@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <new>
 
 namespace dispel::ros2 {
 namespace {
@@ -27,12 +28,21 @@ struct RawData : ddsi_serdata {
   std::uint32_t size = 0;           // Without the padding.
 };
 
-RawData* make_data(const ddsi_sertype* type, ddsi_serdata_kind kind, std::size_t size) {
-  auto* d = new RawData();
+// Cyclone calls the operations below from its own C threads: none may throw. Out of memory,
+// they return null (or false), as Cyclone's own do.
+RawData* make_data(const ddsi_sertype* type, ddsi_serdata_kind kind, std::size_t size) noexcept {
+  if (size > std::numeric_limits<std::uint32_t>::max()) return nullptr;
+  auto* d = new (std::nothrow) RawData();
+  if (d == nullptr) return nullptr;
+  try {
+    d->bytes.assign((size + 3) / 4 * 4, 0);
+  } catch (...) {
+    delete d;
+    return nullptr;
+  }
   ddsi_serdata_init(d, type, kind);
   d->hash = type->serdata_basehash;  // Keyless: one instance.
   d->size = static_cast<std::uint32_t>(size);
-  d->bytes.assign((size + 3) / 4 * 4, 0);
   return d;
 }
 
@@ -44,8 +54,8 @@ std::uint32_t data_size(const ddsi_serdata* d) { return raw(d)->size; }
 
 ddsi_serdata* data_from_ser(const ddsi_sertype* type, ddsi_serdata_kind kind,
                             const nn_rdata* fragchain, std::size_t size) {
-  if (size > std::numeric_limits<std::uint32_t>::max()) return nullptr;
   RawData* d = make_data(type, kind, size);
+  if (d == nullptr) return nullptr;
   // The fragments cover [0, size) in order, possibly overlapping: each adds what lies past the
   // previous one's end.
   std::size_t off = 0;
@@ -64,8 +74,8 @@ ddsi_serdata* data_from_ser(const ddsi_sertype* type, ddsi_serdata_kind kind,
 ddsi_serdata* data_from_ser_iov(const ddsi_sertype* type, ddsi_serdata_kind kind,
                                 ddsrt_msg_iovlen_t niov, const ddsrt_iovec_t* iov,
                                 std::size_t size) {
-  if (size > std::numeric_limits<std::uint32_t>::max()) return nullptr;
   RawData* d = make_data(type, kind, size);
+  if (d == nullptr) return nullptr;
   std::size_t off = 0;
   for (ddsrt_msg_iovlen_t k = 0; k < niov && off < size; ++k) {
     const std::size_t n = std::min<std::size_t>(iov[k].iov_len, size - off);
@@ -83,8 +93,8 @@ ddsi_serdata* data_from_sample(const ddsi_sertype* type, ddsi_serdata_kind kind,
                                const void* sample) {
   const auto& bytes = *static_cast<const Sample*>(sample);
   if (kind != SDK_DATA) return make_data(type, kind, 0);
-  if (bytes.size() > std::numeric_limits<std::uint32_t>::max()) return nullptr;
   RawData* d = make_data(type, kind, bytes.size());
+  if (d == nullptr) return nullptr;
   std::copy(bytes.begin(), bytes.end(), d->bytes.begin());
   return d;
 }
@@ -109,12 +119,17 @@ void data_to_ser_unref(ddsi_serdata* d, const ddsrt_iovec_t*) { ddsi_serdata_unr
 bool data_to_sample(const ddsi_serdata* d, void* sample, void**, void*) {
   const RawData* data = raw(d);
   auto& bytes = *static_cast<Sample*>(sample);
-  bytes.assign(data->bytes.begin(), data->bytes.begin() + data->size);
+  try {
+    bytes.assign(data->bytes.begin(), data->bytes.begin() + data->size);
+  } catch (...) {
+    return false;
+  }
   return true;
 }
 
 ddsi_serdata* data_to_untyped(const ddsi_serdata* d) {
   RawData* key = make_data(d->type, SDK_KEY, 0);
+  if (key == nullptr) return nullptr;
   key->type = nullptr;  // Untyped: the key alone, which a keyless type does not have.
   return key;
 }
@@ -191,17 +206,6 @@ void type_free_samples(const ddsi_sertype*, void** ptrs, std::size_t count, dds_
 bool type_equal(const ddsi_sertype*, const ddsi_sertype*) { return true; }  // Names compared.
 std::uint32_t type_hash(const ddsi_sertype*) { return 0; }
 
-std::size_t type_serialized_size(const ddsi_sertype*, const void* sample) {
-  return static_cast<const Sample*>(sample)->size();
-}
-
-bool type_serialize_into(const ddsi_sertype*, const void* sample, void* buf, std::size_t size) {
-  const auto& bytes = *static_cast<const Sample*>(sample);
-  if (size < bytes.size()) return false;
-  std::memcpy(buf, bytes.data(), bytes.size());
-  return true;
-}
-
 const ddsi_sertype_ops kTypeOps = [] {
   ddsi_sertype_ops ops{};
   ops.version = ddsi_sertype_v0;
@@ -211,8 +215,9 @@ const ddsi_sertype_ops kTypeOps = [] {
   ops.free_samples = type_free_samples;
   ops.equal = type_equal;
   ops.hash = type_hash;
-  ops.get_serialized_size = type_serialized_size;
-  ops.serialize_into = type_serialize_into;
+  // get_serialized_size and serialize_into stay null: Cyclone 0.10 uses them only for shared
+  // memory (iceoryx), whose receiving side this type does not implement; with them null it never
+  // offers it.
   return ops;
 }();
 
@@ -233,7 +238,7 @@ dds_entity_t make_topic(const Participant& participant, const DdsTopic& dds,
   const dds_entity_t handle =
       dds_create_topic_sertype(participant.handle(), topic.c_str(), &st, nullptr, nullptr, nullptr);
   if (handle < 0) {
-    type_free(t);
+    ddsi_sertype_unref(t);  // Still referenced once: unref frees it (type_free).
     throw DdsError(dds_message("cannot make the DDS topic " + topic + " of type " + type, handle));
   }
   *actual = st;
@@ -243,8 +248,7 @@ dds_entity_t make_topic(const Participant& participant, const DdsTopic& dds,
 // The DDS QoS of a ROS 2 profile.
 struct QosHandle {
   dds_qos_t* q;
-  explicit QosHandle(const Qos& qos) : q(dds_create_qos()) {
-    if (qos.depth < 1) throw DdsError("a QoS history depth must be at least 1");
+  explicit QosHandle(const Qos& qos) : q(checked(qos)) {
     dds_qset_reliability(q,
                          qos.reliability == Qos::Reliability::kReliable
                              ? DDS_RELIABILITY_RELIABLE
@@ -254,8 +258,20 @@ struct QosHandle {
                                ? DDS_DURABILITY_TRANSIENT_LOCAL
                                : DDS_DURABILITY_VOLATILE);
     dds_qset_history(q, DDS_HISTORY_KEEP_LAST, qos.depth);
+    // As ROS 2's RMW sets them: a late joiner of a transient-local writer gets its whole history
+    // (Cyclone takes it from the durability service's), and a writer that goes away leaves its
+    // readers "no writers", not "disposed".
+    if (qos.durability == Qos::Durability::kTransientLocal) {
+      dds_qset_durability_service(q, 0, DDS_HISTORY_KEEP_LAST, qos.depth, DDS_LENGTH_UNLIMITED,
+                                  DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
+    }
+    dds_qset_writer_data_lifecycle(q, false);
     const dds_data_representation_id_t xcdr1 = DDS_DATA_REPRESENTATION_XCDR1;
     dds_qset_data_representation(q, 1, &xcdr1);
+  }
+  static dds_qos_t* checked(const Qos& qos) {
+    if (qos.depth < 1) throw DdsError("a QoS history depth must be at least 1");
+    return dds_create_qos();
   }
   ~QosHandle() { dds_delete_qos(q); }
   QosHandle(const QosHandle&) = delete;
@@ -398,7 +414,7 @@ void Writer::write(const std::vector<std::uint8_t>& cdr) {
   }
   ddsi_serdata* d = data_from_sample(type_, SDK_DATA, &cdr);
   if (d == nullptr) throw DdsError("a message is too large for DDS");
-  // dds_writecdr takes the serdata's reference, whatever it returns.
+  // dds_writecdr takes the serdata's reference on every path a live writer can take.
   const dds_return_t rc = dds_writecdr(writer_, d);
   if (rc != DDS_RETCODE_OK) throw DdsError(dds_message("cannot write a DDS sample", rc));
 }
@@ -434,6 +450,7 @@ Reader::Reader(Participant& participant, const DdsTopic& topic, const Qos& qos) 
   waitset_ = dds_create_waitset(participant.handle());
   condition_ = dds_create_readcondition(reader_, DDS_ANY_STATE);
   if (waitset_ < 0 || condition_ < 0 || dds_waitset_attach(waitset_, condition_, 0) < 0) {
+    if (waitset_ >= 0) dds_delete(waitset_);
     dds_delete(reader_);
     dds_delete(topic_);
     throw DdsError("cannot make a DDS wait set for " + ros_topic);
@@ -458,14 +475,20 @@ std::vector<std::vector<std::uint8_t>> Reader::take(double timeout_s) {
   for (;;) {
     const dds_return_t n = dds_takecdr(reader_, samples, kBatch, infos, DDS_ANY_STATE);
     if (n <= 0) break;
-    for (dds_return_t k = 0; k < n; ++k) {
-      if (infos[k].valid_data) {
-        const std::uint32_t size = ddsi_serdata_size(samples[k]);
-        std::vector<std::uint8_t> bytes(size);
-        ddsi_serdata_to_ser(samples[k], 0, size, bytes.data());
-        out.push_back(std::move(bytes));
+    dds_return_t k = 0;
+    try {
+      for (; k < n; ++k) {
+        if (infos[k].valid_data) {
+          const std::uint32_t size = ddsi_serdata_size(samples[k]);
+          std::vector<std::uint8_t> bytes(size);
+          ddsi_serdata_to_ser(samples[k], 0, size, bytes.data());
+          out.push_back(std::move(bytes));
+        }
+        ddsi_serdata_unref(samples[k]);
       }
-      ddsi_serdata_unref(samples[k]);
+    } catch (...) {  // Out of memory: the references taken are given back.
+      for (; k < n; ++k) ddsi_serdata_unref(samples[k]);
+      throw;
     }
     if (static_cast<std::uint32_t>(n) < kBatch) break;
   }

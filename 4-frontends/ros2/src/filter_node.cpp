@@ -1,7 +1,5 @@
 #include "dispel/ros2/filter_node.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <cmath>
 #include <set>
 #include <utility>
@@ -10,7 +8,7 @@
 #include "dispel/io/errors.hpp"
 #include "dispel/io/ros2_messages.hpp"
 #include "dispel/io/text.hpp"
-#include "dispel/ros2/graph.hpp"
+#include "parameter_file.hpp"
 
 namespace dispel::ros2 {
 namespace {
@@ -19,112 +17,40 @@ namespace {
 // (as `dispel filter` reads odometry: MotionQuery's defaults).
 constexpr double kPoseToleranceS = 0.05;
 constexpr double kPoseMaxGapS = 0.5;
-
-// The node's own parameters, read and removed from @p p; the rest is the filter's.
-void read_node_keys(YAML::Node& p, FilterNodeSettings& s, const std::string& origin) {
-  const auto take = [&](const char* key) {
-    const YAML::Node& map = p;  // Looked up const: a missing key is not made.
-    const YAML::Node v = map[key];
-    if (!v.IsDefined()) return YAML::Node(YAML::NodeType::Undefined);
-    YAML::Node copy = YAML::Clone(v);
-    p.remove(key);
-    return copy;
-  };
-  const auto bad = [&](const char* key, const YAML::Node& v, const char* want) {
-    return io::ConfigError(origin + ": " + key + " must be " + want + " (got " +
-                           io::quote(YAML::Dump(v)) + ")");
-  };
-  const auto text = [&](const char* key, std::string& out) {
-    const YAML::Node v = take(key);
-    if (!v.IsDefined()) return;
-    if (!v.IsScalar()) throw bad(key, v, "a string");
-    out = v.Scalar();
-  };
-  const auto boolean = [&](const char* key, bool& out) {
-    const YAML::Node v = take(key);
-    if (!v.IsDefined()) return;
-    if (!v.IsScalar() || !YAML::convert<bool>::decode(v, out)) throw bad(key, v, "true or false");
-  };
-  const auto number = [&](const char* key, double& out, double min, const char* want) {
-    const YAML::Node v = take(key);
-    if (!v.IsDefined()) return;
-    double d = 0.0;
-    if (!v.IsScalar() || !YAML::convert<double>::decode(v, d) || !std::isfinite(d) || d < min) {
-      throw bad(key, v, want);
-    }
-    out = d;
-  };
-  text("scan_topic", s.scan_topic);
-  if (!s.scan_topic.empty() && s.scan_topic[0] != '/') s.scan_topic = "/" + s.scan_topic;
-  text("fixed_frame", s.fixed_frame);
-  s.fixed_frame = io::FrameTree::normalise(s.fixed_frame);
-  if (s.fixed_frame.empty()) throw io::ConfigError(origin + ": fixed_frame must not be empty");
-  boolean("static_sensor", s.static_sensor);
-  number("transform_timeout_s", s.transform_timeout_s, 0.0, "a finite number >= 0");
-  std::string policy = "publish_unfiltered";
-  text("on_missing_transform", policy);
-  if (policy != "publish_unfiltered" && policy != "drop") {
-    throw io::ConfigError(origin +
-                          ": on_missing_transform must be publish_unfiltered or drop (got " +
-                          io::quote(policy) + ")");
-  }
-  s.drop_without_transform = policy == "drop";
-  double queue = s.queue_size;
-  number("queue_size", queue, 1.0, "an integer >= 1");
-  if (queue != std::floor(queue) || queue > 1e6) {
-    throw io::ConfigError(origin + ": queue_size must be an integer from 1 to 1000000");
-  }
-  s.queue_size = static_cast<int>(queue);
-  text("ros_distro", s.ros_distro);
-  if (!s.ros_distro.empty()) {
-    try {
-      gid_layout_named(s.ros_distro);
-    } catch (const DdsError& e) {
-      throw io::ConfigError(origin + ": " + e.what());
-    }
-  }
-  boolean("scale_to_scanner", s.runner.scale_to_scanner);
-  number("scan_period_s", s.runner.scan_period_s, 0.0, "a finite number >= 0 (0: from the scans)");
-  boolean("use_sim_time", s.use_sim_time);
-}
+// How far back the robot's motion is kept (tf2's default buffer: 10 s).
+constexpr double kMotionHistoryS = 10.0;
 
 }  // namespace
 
 FilterNodeSettings parse_filter_node_parameters(const std::string& yaml_text,
                                                 const std::string& origin,
                                                 const std::string& node_name) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw io::ConfigError(origin + ": not YAML (" + io::one_line(e.what()) + ")");
-  }
+  return parse_filter_node_parameters(std::vector<ParameterText>{{yaml_text, origin}}, node_name);
+}
+
+FilterNodeSettings parse_filter_node_parameters(const std::vector<ParameterText>& files,
+                                                const std::string& node_name) {
+  ParameterFile p(files, node_name);
+  const std::string& origin = p.origin();
   FilterNodeSettings s;
   s.node_name = node_name;
-  YAML::Node params = root;
-  if (root.IsMap()) {
-    // ROS 2's layout: the node's name (with or without its leading '/'), or "/**" for every node.
-    for (const std::string& key : {node_name, "/" + node_name, std::string("/**")}) {
-      if (root[key] && root[key]["ros__parameters"]) {
-        params = root[key]["ros__parameters"];
-        break;
-      }
-    }
-    if (params == root) {
-      for (const auto& entry : root) {
-        if (entry.second.IsMap() && entry.second["ros__parameters"]) {
-          throw io::ConfigError(origin + ": has parameters for " +
-                                io::quote(entry.first.as<std::string>()) + ", not for " +
-                                io::quote(node_name) + " or /**");
-        }
-      }
-    }
-  } else if (root.IsDefined() && !root.IsNull()) {
-    throw io::ConfigError(origin + ": must be a mapping of parameters");
-  }
-  YAML::Node rest = params.IsMap() ? YAML::Clone(params) : YAML::Node(YAML::NodeType::Map);
-  read_node_keys(rest, s, origin);
-  s.runner.config = io::parse_filter_config(rest.size() == 0 ? "{}" : YAML::Dump(rest), origin);
+  p.topic("scan_topic", s.scan_topic);
+  p.text("fixed_frame", s.fixed_frame);
+  s.fixed_frame = io::FrameTree::normalise(s.fixed_frame);
+  if (s.fixed_frame.empty()) throw io::ConfigError(origin + ": fixed_frame must not be empty");
+  p.boolean("static_sensor", s.static_sensor);
+  p.number("transform_timeout_s", s.transform_timeout_s, 0.0, "a finite number >= 0");
+  std::string policy = "publish_unfiltered";
+  p.choice("on_missing_transform", policy, {"publish_unfiltered", "drop"});
+  s.drop_without_transform = policy == "drop";
+  p.integer("queue_size", s.queue_size, 1, 1000000);
+  p.distribution("ros_distro", s.ros_distro);
+  p.boolean("scale_to_scanner", s.runner.scale_to_scanner);
+  p.number("scan_period_s", s.runner.scan_period_s, 0.0,
+           "a finite number >= 0 (0: from the scans)");
+  p.boolean("use_sim_time", s.use_sim_time);
+  // Everything else is the filter's: the same parser, keys and messages as `dispel filter`.
+  s.runner.config = io::parse_filter_config(p.rest_yaml(), origin);
   try {
     s.runner.validate();
   } catch (const std::invalid_argument& e) {
@@ -150,6 +76,9 @@ void FilterNodeCore::transforms(const io::TransformsMessage& message, bool is_st
         ++counts_.time_resets;
       }
       if (!it->second.add(stamp_s, t.child_in_parent)) ++counts_.transforms_refused;
+      // Kept for kMotionHistoryS, as tf2 keeps its buffer: without scans (or with scans that
+      // are dropped) it would otherwise grow for as long as the node runs.
+      it->second.forget_before(stamp_s - kMotionHistoryS);
       continue;
     }
     const Pose2& p = t.child_in_parent;
@@ -159,6 +88,12 @@ void FilterNodeCore::transforms(const io::TransformsMessage& message, bool is_st
     }
     mounts_.set(parent, child, p);
   }
+}
+
+std::size_t FilterNodeCore::motion_kept() const {
+  std::size_t n = 0;
+  for (const auto& [robot, poses] : motion_) n += poses.size();
+  return n;
 }
 
 std::optional<Pose2> FilterNodeCore::sensor_pose(const std::string& laser_frame, double stamp_s,

@@ -55,9 +55,10 @@ TEST(Ros2FilterNodeParameters, Ros2sLayoutFlatFilesAndTheFiltersKeys) {
 
   EXPECT_EQ(parse_error("other:\n  ros__parameters: {}\n"),
             "p.yaml: has parameters for 'other', not for 'dispel_filter' or /**");
-  EXPECT_EQ(parse_error("queue_size: 0\n"), "p.yaml: queue_size must be an integer >= 1 (got '0')");
+  EXPECT_EQ(parse_error("queue_size: 0\n"),
+            "p.yaml: queue_size must be an integer from 1 to 1000000 (got '0')");
   EXPECT_EQ(parse_error("queue_size: 2.5\n"),
-            "p.yaml: queue_size must be an integer from 1 to 1000000");
+            "p.yaml: queue_size must be an integer from 1 to 1000000 (got '2.5')");
   EXPECT_EQ(parse_error("on_missing_transform: wait\n"),
             "p.yaml: on_missing_transform must be publish_unfiltered or drop (got 'wait')");
   EXPECT_EQ(parse_error("transform_timeout_s: .nan\n"),
@@ -66,6 +67,38 @@ TEST(Ros2FilterNodeParameters, Ros2sLayoutFlatFilesAndTheFiltersKeys) {
   EXPECT_NE(parse_error("no_such_key: 1\n").find("no_such_key"), std::string::npos);
   EXPECT_EQ(parse_error("- a list\n"), "p.yaml: must be a mapping of parameters");
   EXPECT_NE(parse_error("a: [\n").find("p.yaml: not YAML"), std::string::npos);
+}
+
+// Several files, as ros2 launch passes them (a parameter file, then its own with use_sim_time),
+// each with "/**" and the node's block: merged in order, a later value replacing an earlier one.
+// A typo that makes a node's block a string is an error that names the file, not an abort.
+TEST(Ros2FilterNodeParameters, SeveralFilesAndBlocksMergeAsRos2sDo) {
+  const FilterNodeSettings s = parse_filter_node_parameters(
+      {{"/**:\n  ros__parameters: {fixed_frame: map, queue_size: 3}\n"
+        "dispel_filter:\n  ros__parameters: {queue_size: 5, static_sensor: true}\n",
+        "a.yaml"},
+       {"/**:\n  ros__parameters: {use_sim_time: true}\n", "b.yaml"},
+       {"/**:\n  ros__parameters: {queue_size: 7}\n", "-p queue_size:=7"}},
+      "dispel_filter");
+  EXPECT_EQ(s.fixed_frame, "map");
+  EXPECT_TRUE(s.static_sensor);
+  EXPECT_TRUE(s.use_sim_time);
+  EXPECT_EQ(s.queue_size, 7);
+  // (Read as a flat file, whose key the filter does not know.)
+  EXPECT_EQ(parse_error("dispel_filter: ros__parameters\n"), "p.yaml: unknown key 'dispel_filter'");
+}
+
+// Without scans, the robot's motion is kept for 10 s (tf2's buffer), not for as long as the
+// node runs.
+TEST(Ros2FilterNodeCore, TheMotionKeptIsBoundedWithoutScans) {
+  FilterNodeCore core(FilterNodeSettings{});
+  for (int k = 0; k < 100000; ++k) {
+    io::TransformsMessage m;
+    m.transforms.push_back(
+        {io::Stamp::from_seconds(1000.0 + 0.01 * k), "odom", "base_link", Pose2{}});
+    core.transforms(m, false);
+  }
+  EXPECT_LE(core.motion_kept(), 1002u);
 }
 
 // The shipped parameter file states the defaults.

@@ -16,6 +16,7 @@
 #include "dispel/io/frame_tree.hpp"
 #include "dispel/io/recording.hpp"
 #include "dispel/pipeline/scan_filter_runner.hpp"
+#include "dispel/ros2/parameter_text.hpp"
 
 namespace dispel::ros2 {
 
@@ -40,6 +41,10 @@ struct FilterNodeSettings {
 /// @p origin names the file in errors. @throws io::ConfigError naming the key and the value.
 FilterNodeSettings parse_filter_node_parameters(const std::string& yaml_text,
                                                 const std::string& origin,
+                                                const std::string& node_name);
+/// The same from several files in order (ParameterFile's rules: "/**" then the node's block, a
+/// later value replacing an earlier one).
+FilterNodeSettings parse_filter_node_parameters(const std::vector<ParameterText>& files,
                                                 const std::string& node_name);
 
 /// What the node publishes for one scan.
@@ -92,6 +97,8 @@ class FilterNodeCore {
   const FilterNodeCounts& counts() const { return counts_; }
   const pipeline::ScanFilterRunner& runner() const { return runner_; }
   void count_undecodable() { ++counts_.undecodable; }
+  /// The transforms of the robot's motion kept (all robot frames).
+  std::size_t motion_kept() const;
 
  private:
   struct Waiting {

@@ -261,13 +261,17 @@ int run_filter(const ros2::FilterNodeSettings& settings) {
 int run_odometry(const ros2::OdometryNodeSettings& settings) {
   NodeRuntime rt("odometry", settings.node_name, settings.use_sim_time, settings.ros_distro);
   ros2::Participant& p = rt.participant();
-  // Sensor data QoS in: best effort matches any driver.
+  // Best effort in: it matches any driver. Kept: queue_size (an IMU at 200 Hz fills ROS 2's
+  // sensor-data depth of 5 within one wait of the loop).
+  const ros2::Qos in{ros2::Qos::Reliability::kBestEffort, ros2::Qos::Durability::kVolatile,
+                     settings.queue_size};
   ros2::Reader wheels(
       p, settings.wheels_topic,
-      settings.wheels_as_odometry ? "nav_msgs/msg/Odometry" : "sensor_msgs/msg/JointState",
-      ros2::Qos::sensor_data());
-  ros2::Reader imu(p, settings.imu_topic, "sensor_msgs/msg/Imu", ros2::Qos::sensor_data());
-  ros2::Writer odometry(p, settings.odometry_topic, "nav_msgs/msg/Odometry", ros2::Qos::defaults());
+      settings.wheels_as_odometry ? "nav_msgs/msg/Odometry" : "sensor_msgs/msg/JointState", in);
+  ros2::Reader imu(p, settings.imu_topic, "sensor_msgs/msg/Imu", in);
+  ros2::Writer odometry(
+      p, settings.odometry_topic, "nav_msgs/msg/Odometry",
+      {ros2::Qos::Reliability::kReliable, ros2::Qos::Durability::kVolatile, settings.queue_size});
   std::optional<ros2::Writer> tf;
   if (settings.publish_tf) {
     tf.emplace(p, "/tf", "tf2_msgs/msg/TFMessage",

@@ -36,6 +36,7 @@
 #include "dispel/pipeline/scan_filter_runner.hpp"
 #include "dispel/ros2/dds.hpp"
 #include "dispel/ros2/graph.hpp"
+#include "node_process.hpp"
 #include "rmw_dds_common_humble.h"
 #include "test_files.hpp"
 
@@ -44,6 +45,7 @@ namespace {
 
 using cyclone_test::eventually;
 using cyclone_test::kWaitS;
+using cyclone_test::NodeProcess;
 // Unicast discovery on the loopback (no multicast: CI machines may have none), ports of up to
 // 20 participants; nothing leaves the machine.
 constexpr const char* kLoopback =
@@ -61,46 +63,6 @@ std::vector<io::ScanMessage> recorded_scans() {
   });
   return scans;
 }
-
-// The node as a child process, its stderr in a file.
-class NodeProcess {
- public:
-  NodeProcess(const std::string& params, const std::string& name, int domain)
-      : log_(test::temp_path("node.log")) {
-    const std::string params_path = test::write_text("params.yaml", params);
-    const std::string node_arg = "__node:=" + name;  // Made before fork: the child only execs.
-    const std::string domain_id = std::to_string(domain);
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      const int fd = ::open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      ::dup2(fd, 2);
-      ::setenv("ROS_DOMAIN_ID", domain_id.c_str(), 1);
-      ::execl(DISPEL_ROS2_EXECUTABLE, DISPEL_ROS2_EXECUTABLE, "filter", "--ros-args",
-              "--params-file", params_path.c_str(), "-r", node_arg.c_str(), nullptr);
-      ::_exit(127);
-    }
-  }
-  ~NodeProcess() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-  // SIGTERM, then its exit status (-1: it did not stop within kWaitS).
-  int stop() {
-    ::kill(pid_, SIGTERM);
-    int status = 0;
-    const bool exited = eventually([&] { return ::waitpid(pid_, &status, WNOHANG) == pid_; });
-    if (!exited) return -1;
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  }
-  std::string log() const { return test::read_bytes(log_); }
-
- private:
-  std::string log_;
-  pid_t pid_ = -1;
-};
 
 Guid guid_of(const dds_builtintopic_guid_t& g) {
   Guid out{};
@@ -197,7 +159,7 @@ void play_and_compare(Qos scan_qos, const char* name) {
   pipeline::ScanFilterRunner reference(options);
 
   const std::string node_name = "dispel_filter_p" + std::to_string(::getpid());
-  NodeProcess node(params, node_name, domain);
+  NodeProcess node("filter", params, node_name, domain);
   Participant test(domain);
   Writer driver(test, scan_topic, "sensor_msgs/msg/LaserScan", scan_qos);
   Reader filtered(test, scan_topic + "_filtered", "sensor_msgs/msg/LaserScan", Qos::defaults());

@@ -41,6 +41,7 @@ OdometryNodeSettings parse_odometry_node_parameters(const std::vector<ParameterT
   p.boolean("publish_tf", s.publish_tf);
   p.number("reorder_window_s", s.reorder_window_s, 0.0, "a finite number >= 0");
   p.number("source_timeout_s", s.source_timeout_s, 1e-3, "a finite number >= 0.001");
+  p.integer("queue_size", s.queue_size, 1, 1000000);
   p.boolean("use_sim_time", s.use_sim_time);
   p.distribution("ros_distro", s.ros_distro);
   // The filter's keys may share the file (one file for both nodes), as they may share a file

@@ -29,6 +29,7 @@ struct OdometryNodeSettings {
   bool publish_tf = false;         ///< Also odom_frame -> base_frame on /tf.
   double reorder_window_s = 0.05;  ///< Stamp time measurements wait for both sources.
   double source_timeout_s = 0.5;   ///< Steady time a silent source is waited for.
+  int queue_size = 100;            ///< Of the readers (best effort: the oldest go when full).
   bool use_sim_time = false;
   std::string ros_distro;  ///< As FilterNodeSettings::ros_distro.
   io::OdometrySettings odometry;

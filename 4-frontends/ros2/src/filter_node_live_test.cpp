@@ -44,15 +44,9 @@ namespace dispel::ros2 {
 namespace {
 
 using cyclone_test::eventually;
+using cyclone_test::kLoopback;
 using cyclone_test::kWaitS;
 using cyclone_test::NodeProcess;
-// Unicast discovery on the loopback (no multicast: CI machines may have none), ports of up to
-// 20 participants; nothing leaves the machine.
-constexpr const char* kLoopback =
-    "<General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
-    "<AllowMulticast>false</AllowMulticast></General><Discovery><Peers><Peer "
-    "address=\"127.0.0.1\"/></Peers><ParticipantIndex>auto</ParticipantIndex>"
-    "<MaxAutoParticipantIndex>20</MaxAutoParticipantIndex></Discovery>";
 
 std::vector<io::ScanMessage> recorded_scans() {
   auto reader = jobs::open_recording(

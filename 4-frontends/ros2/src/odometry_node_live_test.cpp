@@ -28,13 +28,8 @@ namespace dispel::ros2 {
 namespace {
 
 using cyclone_test::eventually;
+using cyclone_test::kLoopback;
 using cyclone_test::NodeProcess;
-
-constexpr const char* kLoopback =
-    "<General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
-    "<AllowMulticast>false</AllowMulticast></General><Discovery><Peers><Peer "
-    "address=\"127.0.0.1\"/></Peers><ParticipantIndex>auto</ParticipantIndex>"
-    "<MaxAutoParticipantIndex>20</MaxAutoParticipantIndex></Discovery>";
 
 TEST(Ros2OdometryNodeLive, FusesTheHuskyRecordingLikeTheSharedRunner) {
   ::setenv("CYCLONEDDS_URI", kLoopback, 1);

@@ -17,6 +17,14 @@ namespace dispel::ros2::cyclone_test {
 /// loaded machine may keep a thread waiting for a core for seconds).
 constexpr double kWaitS = 20.0;
 
+/// CYCLONEDDS_URI for the live tests: unicast discovery on the loopback (no multicast: CI
+/// machines may have none), ports for up to 20 participants; nothing leaves the machine.
+constexpr const char* kLoopback =
+    "<General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
+    "<AllowMulticast>false</AllowMulticast></General><Discovery><Peers><Peer "
+    "address=\"127.0.0.1\"/></Peers><ParticipantIndex>auto</ParticipantIndex>"
+    "<MaxAutoParticipantIndex>20</MaxAutoParticipantIndex></Discovery>";
+
 /// Whether @p condition came true within kWaitS (looked at every 2 ms).
 inline bool eventually(const std::function<bool()>& condition) {
   const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);

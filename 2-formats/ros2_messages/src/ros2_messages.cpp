@@ -396,6 +396,10 @@ TransformsMessage decode_ros2_transforms(const std::uint8_t* data, std::size_t s
   });
 }
 
+Stamp decode_ros2_clock(const std::uint8_t* data, std::size_t size) {
+  return decode<Stamp>(data, size, [](CdrReader& r) { return r.time(); });
+}
+
 JointStateMessage decode_ros2_joint_state(const std::uint8_t* data, std::size_t size) {
   return decode<JointStateMessage>(data, size, [](CdrReader& r) {
     JointStateMessage m;

@@ -122,7 +122,7 @@ class NodeRuntime {
               .count());
     for (const auto& bytes : clock_->take(0.0)) {
       try {
-        sim_time_s_ = ros2::decode_clock(bytes);
+        sim_time_s_ = io::decode_ros2_clock(bytes.data(), bytes.size()).seconds();
       } catch (const io::CdrError&) {
         ++undecodable_;
       }
@@ -298,11 +298,6 @@ int run_odometry(const ros2::OdometryNodeSettings& settings) {
   // Each source wakes the loop at once in turn; a source gone quiet is given up within the
   // loop's waits (source_timeout_s is checked at every pass).
   while (!g_stop) {
-    for (const auto& bytes : imu.take(0.0)) {
-      if (auto m = decoded(rt, bytes, io::decode_ros2_imu)) {
-        publish(core.imu(*m, steady_seconds(), rt.ros_time()));
-      }
-    }
     for (const auto& bytes : wheels.take(kLoopWaitS / 2)) {
       if (settings.wheels_as_odometry) {
         if (auto m = decoded(rt, bytes, io::decode_ros2_odometry)) {

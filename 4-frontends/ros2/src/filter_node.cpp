@@ -169,24 +169,4 @@ std::vector<FilterNodeOutput> FilterNodeCore::poll(double now_s) {
   return out;
 }
 
-double decode_clock(const std::vector<std::uint8_t>& cdr) {
-  // The encapsulation header, then builtin_interfaces/Time: int32 sec, uint32 nanosec.
-  if (cdr.size() < 12 || cdr[0] != 0 || cdr[1] > 1) {
-    throw io::CdrError("a /clock message is not rosgraph_msgs/Clock in CDR (" +
-                       std::to_string(cdr.size()) + " bytes)");
-  }
-  const bool little = cdr[1] == 1;
-  const auto u32 = [&](std::size_t at) {
-    std::uint32_t v = 0;
-    for (std::size_t k = 0; k < 4; ++k) {
-      v |= static_cast<std::uint32_t>(cdr[at + (little ? k : 3 - k)]) << (8 * k);
-    }
-    return v;
-  };
-  const auto sec = static_cast<std::int32_t>(u32(4));
-  const std::uint32_t nanosec = u32(8);
-  if (nanosec >= 1000000000U) throw io::CdrError("a /clock message has nanosec >= 1e9");
-  return static_cast<double>(sec) + 1e-9 * static_cast<double>(nanosec);
-}
-
 }  // namespace dispel::ros2

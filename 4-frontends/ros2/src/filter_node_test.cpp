@@ -242,6 +242,9 @@ TEST(Ros2FilterNodeCore, AScanWithoutAStampIsFilteredAtTheTimeItCame) {
 }
 
 TEST(Ros2FilterNode, ClockMessagesDecode) {
+  const auto decode_clock = [](const std::vector<std::uint8_t>& cdr) {
+    return io::decode_ros2_clock(cdr.data(), cdr.size()).seconds();
+  };
   // rosgraph_msgs/Clock: little-endian, 1700000000 s and 250000000 ns.
   const std::vector<std::uint8_t> le = {0, 1, 0, 0, 0x00, 0xf1, 0x53, 0x65, 0x80, 0xb2, 0xe6, 0x0e};
   EXPECT_DOUBLE_EQ(decode_clock(le), 1700000000.25);

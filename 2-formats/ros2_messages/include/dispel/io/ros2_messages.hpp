@@ -45,6 +45,8 @@ TransformsMessage decode_ros2_transforms(const std::uint8_t* data, std::size_t s
 JointStateMessage decode_ros2_joint_state(const std::uint8_t* data, std::size_t size);
 ImuMessage decode_ros2_imu(const std::uint8_t* data, std::size_t size);
 NavSatFixMessage decode_ros2_nav_sat_fix(const std::uint8_t* data, std::size_t size);
+/// rosgraph_msgs/Clock (what a node under use_sim_time takes ROS time from): its time.
+Stamp decode_ros2_clock(const std::uint8_t* data, std::size_t size);
 
 /// Encodes a message, little-endian CDR with its encapsulation header. The fields the recording
 /// model does not keep are written as ROS 1's writer writes them: zero (covariances, z, roll,

@@ -72,9 +72,6 @@ struct FilterNodeCounts {
 /// transforms out of order, refused.
 constexpr double kTimeJumpS = 1.0;
 
-/// rosgraph_msgs/Clock in CDR: its time in seconds. @throws io::CdrError when it is not one.
-double decode_clock(const std::vector<std::uint8_t>& cdr);
-
 class FilterNodeCore {
  public:
   /// @throws std::invalid_argument if settings.runner.validate() does.

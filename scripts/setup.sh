@@ -26,6 +26,9 @@ packages=(
                                        # their live tests: rosmaster, roslaunch,
                                        # static_transform_publisher
   cyclonedds-dev cyclonedds-tools     # ROS 2 over DDS (ros2/, -DDISPEL_WITH_ROS2=ON): Cyclone DDS, idlc
+  libfastrtps-dev fastddsgen default-jre-headless
+                                       # its cross-vendor test: Fast DDS, and fastddsgen (Java)
+                                       # for the message types
   clang libclang-rt-14-dev             # scripts/fuzz.sh: libFuzzer, ASan, UBSan (build-fuzz/)
 )
 

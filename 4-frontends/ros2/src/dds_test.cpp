@@ -20,6 +20,7 @@
 #include "cyclone_test_support.hpp"
 #include "dispel/io/ros2_messages.hpp"
 #include "dispel/ros2/graph.hpp"
+#include "live_test_support.hpp"
 #include "rmw_dds_common_humble.h"
 #include "ros2_laser_scan.h"
 
@@ -29,8 +30,8 @@ namespace {
 using io::ScanMessage;
 using io::Stamp;
 
-using cyclone_test::eventually;
 using cyclone_test::typed_reader;
+using live_test::eventually;
 
 // Domains 50-99: their ports (7400 + 250 d) stay below Linux's ephemeral range (32768 on).
 int test_domain() { return 50 + static_cast<int>(::getpid() % 50); }

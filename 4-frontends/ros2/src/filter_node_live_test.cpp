@@ -36,6 +36,7 @@
 #include "dispel/pipeline/scan_filter_runner.hpp"
 #include "dispel/ros2/dds.hpp"
 #include "dispel/ros2/graph.hpp"
+#include "live_test_support.hpp"
 #include "node_process.hpp"
 #include "rmw_dds_common_humble.h"
 #include "test_files.hpp"
@@ -43,10 +44,10 @@
 namespace dispel::ros2 {
 namespace {
 
-using cyclone_test::eventually;
-using cyclone_test::kLoopback;
-using cyclone_test::kWaitS;
-using cyclone_test::NodeProcess;
+using live_test::eventually;
+using live_test::kLoopback;
+using live_test::kWaitS;
+using live_test::NodeProcess;
 
 std::vector<io::ScanMessage> recorded_scans() {
   auto reader = jobs::open_recording(

@@ -15,21 +15,21 @@
 
 #include <chrono>
 
-#include "cyclone_test_support.hpp"
 #include "dispel/io/odometry_inputs.hpp"
 #include "dispel/io/ros2_messages.hpp"
 #include "dispel/jobs/job.hpp"
 #include "dispel/ros2/dds.hpp"
 #include "dispel/ros2/odometry_node.hpp"
+#include "live_test_support.hpp"
 #include "node_process.hpp"
 #include "test_files.hpp"
 
 namespace dispel::ros2 {
 namespace {
 
-using cyclone_test::eventually;
-using cyclone_test::kLoopback;
-using cyclone_test::NodeProcess;
+using live_test::eventually;
+using live_test::kLoopback;
+using live_test::NodeProcess;
 
 TEST(Ros2OdometryNodeLive, FusesTheHuskyRecordingLikeTheSharedRunner) {
   ::setenv("CYCLONEDDS_URI", kLoopback, 1);

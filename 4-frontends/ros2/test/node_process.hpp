@@ -8,12 +8,12 @@
 #include <string>
 #include <vector>
 
-#include "cyclone_test_support.hpp"
+#include "live_test_support.hpp"
 #include "test_files.hpp"
 
 extern char** environ;
 
-namespace dispel::ros2::cyclone_test {
+namespace dispel::ros2::live_test {
 
 class NodeProcess {
  public:
@@ -69,4 +69,4 @@ class NodeProcess {
   pid_t pid_ = -1;
 };
 
-}  // namespace dispel::ros2::cyclone_test
+}  // namespace dispel::ros2::live_test

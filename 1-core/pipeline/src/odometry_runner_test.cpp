@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "dispel/pipeline/node_diagnostics.hpp"
+
 namespace dispel::pipeline {
 namespace {
 
@@ -365,6 +367,50 @@ TEST(OdometryRunner, BadWindowOrConfigurationIsRefused) {
   OdometryConfig bad;
   bad.track_width_m = 0.0;
   EXPECT_THROW(OdometryRunner(bad, 0.1), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace dispel::pipeline
+
+namespace dispel::pipeline {
+namespace {
+
+TEST(OdometryNodeStatus, CountsEachSourceAndCountsRefusedMeasurements) {
+  OdometryRunner runner(OdometryConfig{}, 0.05);
+  for (const Sample& s : arrivals()) {
+    s.imu ? runner.add_imu(s.t_s, s.a) : runner.add_wheels(s.t_s, s.a, s.b);
+    runner.release();
+  }
+  runner.release(true);
+  EXPECT_EQ(odometry_refused(runner), 0);
+  runner.add_wheels(1.0, 0.5, 0.5);  // Older than what was fused: refused as late.
+  runner.release(true);
+  EXPECT_EQ(odometry_refused(runner), 1);
+
+  const DiagnosticStatus s = odometry_node_status("dispel_odometry", "ct", runner, {12, 3, true});
+  EXPECT_EQ(s.name, "dispel_odometry: odometry fusion");
+  EXPECT_EQ(s.level, DiagnosticStatus::Level::kWarn);
+  EXPECT_EQ(s.message, "12 estimates published");
+  const auto value = [&s](const std::string& key) {
+    for (const auto& [k, v] : s.values) {
+      if (k == key) return v;
+    }
+    return std::string("(missing)");
+  };
+  EXPECT_EQ(value("model"), "ct");
+  EXPECT_EQ(value("wheels received"), "101");
+  EXPECT_EQ(value("imu received"), "300");
+  EXPECT_EQ(value("wheels late"), "1");
+  EXPECT_EQ(value("wheel messages without both wheels"), "3");
+  EXPECT_EQ(value("imu arrived out of order"), "0");
+  EXPECT_EQ(value("wheels arrived out of order"), "1");
+  // Seconds with four decimals: the IMU, 40 ms late, lags the newest stamp by less than that.
+  const std::string lag = value("imu largest lag behind newest (s)");
+  ASSERT_EQ(lag.size(), 6u) << lag;
+  EXPECT_GT(std::stod(lag), 0.0);
+  EXPECT_LE(std::stod(lag), 0.04);
+  EXPECT_EQ(odometry_node_status("n", "ct", runner, {12, 3, false}).level,
+            DiagnosticStatus::Level::kOk);
 }
 
 }  // namespace

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "dispel/pipeline/node_diagnostics.hpp"
+
 namespace dispel::pipeline {
 namespace {
 
@@ -173,7 +175,9 @@ TEST(ScanFilterRunner, EachScanSaysWhatItCostAndWhatItDid) {
     } else {
       later_tiles += r.work.free_space_tiles_started;
     }
-    if (k > 0) EXPECT_GT(r.work.map_voxels, 0);  // The room, learnt by the registration.
+    if (k > 0) {
+      EXPECT_GT(r.work.map_voxels, 0);  // The room, learnt by the registration.
+    }
     EXPECT_GE(runner.last_cpu_time_s(), 0.0);
     cpu_total += runner.last_cpu_time_s();
   }
@@ -188,6 +192,56 @@ TEST(ScanFilterRunner, EachScanSaysWhatItCostAndWhatItDid) {
   EXPECT_EQ(r.work.beams, 361);
   EXPECT_EQ(r.work.objects, 0);
   EXPECT_EQ(r.work.free_space_tiles_started, 0);
+}
+
+}  // namespace
+}  // namespace dispel::pipeline
+
+namespace dispel::pipeline {
+namespace {
+
+std::string value_of(const DiagnosticStatus& s, const std::string& key) {
+  for (const auto& [k, v] : s.values) {
+    if (k == key) return v;
+  }
+  return "(missing)";
+}
+
+TEST(FilterNodeStatus, SaysThePeriodsScansAndWarnsOfScansWithoutAPose) {
+  ScanFilterRunnerOptions options;
+  options.config.registration.enabled = false;
+  ScanFilterRunner runner(options);
+  DiagnosticStatus s = filter_node_status("dispel_filter", runner, {});
+  EXPECT_EQ(s.name, "dispel_filter: dynamic filter");
+  EXPECT_EQ(s.level, DiagnosticStatus::Level::kOk);
+  EXPECT_EQ(s.message, "no scans");
+
+  for (int k = 0; k < 40; ++k) runner.process(scene(k, 0.05), 0.0, Pose2{});
+  runner.process(scene(40, 0.05), 0.0, std::nullopt);
+  s = filter_node_status("dispel_filter", runner, {3, 1, 2});
+  EXPECT_EQ(s.level, DiagnosticStatus::Level::kWarn);
+  EXPECT_EQ(s.message.rfind("41 scans, ", 0), 0u) << s.message;
+  EXPECT_NE(s.message.find(" ms per scan (mean); 1 without a sensor pose"), std::string::npos)
+      << s.message;
+  EXPECT_EQ(value_of(s, "scans in period"), "41");
+  EXPECT_EQ(value_of(s, "scans"), "43");  // The runner's 41 and the 2 dropped before it.
+  EXPECT_EQ(value_of(s, "scans filtered"), "40");
+  EXPECT_EQ(value_of(s, "scans without a sensor pose"), "3");
+  EXPECT_EQ(value_of(s, "scans dropped (no sensor pose)"), "2");
+  EXPECT_EQ(value_of(s, "scans published unfiltered (no sensor pose)"), "1");
+  EXPECT_NE(value_of(s, "beams removed (dynamic)"), "0");  // The walker.
+  EXPECT_EQ(value_of(s, "min_points"), std::to_string(runner.config().segmentation.min_points));
+  // Times are in milliseconds with three decimals.
+  const std::string mean = value_of(s, "processing time mean (ms)");
+  ASSERT_GT(mean.size(), 4u);
+  EXPECT_EQ(mean[mean.size() - 4], '.') << mean;
+
+  // The next period: its own times (none), no warning.
+  s = filter_node_status("dispel_filter", runner, {3, 0, 2});
+  EXPECT_EQ(s.level, DiagnosticStatus::Level::kOk);
+  EXPECT_EQ(s.message, "no scans");
+  EXPECT_EQ(value_of(s, "scans in period"), "0");
+  EXPECT_EQ(value_of(s, "scans filtered"), "40");
 }
 
 }  // namespace

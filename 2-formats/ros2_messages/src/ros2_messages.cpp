@@ -487,6 +487,25 @@ std::vector<std::uint8_t> encode_ros2(const TransformsMessage& m) {
   return w.take();
 }
 
+std::vector<std::uint8_t> encode_ros2_diagnostics(
+    const Stamp& stamp, const std::vector<pipeline::DiagnosticStatus>& status) {
+  CdrWriter w;
+  w.header(Header{0, stamp, ""});
+  w.write<std::uint32_t>(static_cast<std::uint32_t>(status.size()));
+  for (const pipeline::DiagnosticStatus& s : status) {
+    w.write<std::uint8_t>(static_cast<std::uint8_t>(s.level));
+    w.string(s.name);
+    w.string(s.message);
+    w.string(s.hardware_id);
+    w.write<std::uint32_t>(static_cast<std::uint32_t>(s.values.size()));
+    for (const auto& [key, value] : s.values) {
+      w.string(key);
+      w.string(value);
+    }
+  }
+  return w.take();
+}
+
 std::vector<std::uint8_t> encode_ros2(const JointStateMessage& m) {
   CdrWriter w;
   w.header(m.header);

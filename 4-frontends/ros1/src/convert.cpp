@@ -125,14 +125,13 @@ geometry_msgs::TransformStamped odometry_transform(const OdometryEstimate& e,
   return t;
 }
 
-diagnostic_msgs::DiagnosticStatus diagnostic_status(
-    const std::string& name, std::uint8_t level, const std::string& message,
-    const std::vector<std::pair<std::string, std::string>>& values) {
+diagnostic_msgs::DiagnosticStatus to_ros(const pipeline::DiagnosticStatus& status) {
   diagnostic_msgs::DiagnosticStatus s;
-  s.name = name;
-  s.level = level;
-  s.message = message;
-  for (const auto& [key, value] : values) {
+  s.name = status.name;
+  s.level = static_cast<std::uint8_t>(status.level);
+  s.message = status.message;
+  s.hardware_id = status.hardware_id;
+  for (const auto& [key, value] : status.values) {
     diagnostic_msgs::KeyValue kv;
     kv.key = key;
     kv.value = value;

@@ -81,11 +81,20 @@ TEST(Ros1Convert, OdometryMessageAndTransformCarryTheEstimate) {
 }
 
 TEST(Ros1Convert, DiagnosticStatusHoldsTheValues) {
-  const auto s = diagnostic_status("f", diagnostic_msgs::DiagnosticStatus::WARN, "m",
-                                   {{"scans", "3"}, {"time", "0.1"}});
+  pipeline::DiagnosticStatus status;
+  status.level = pipeline::DiagnosticStatus::Level::kWarn;
+  status.name = "f";
+  status.message = "m";
+  status.hardware_id = "h";
+  status.values = {{"scans", "3"}, {"time", "0.1"}};
+  const auto s = to_ros(status);
   EXPECT_EQ(s.level, diagnostic_msgs::DiagnosticStatus::WARN);
+  EXPECT_EQ(s.name, "f");
+  EXPECT_EQ(s.message, "m");
+  EXPECT_EQ(s.hardware_id, "h");
   ASSERT_EQ(s.values.size(), 2u);
   EXPECT_EQ(s.values[1].key, "time");
+  EXPECT_EQ(s.values[1].value, "0.1");
 }
 
 }  // namespace

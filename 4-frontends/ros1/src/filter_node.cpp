@@ -65,12 +65,6 @@ FilterNodeSettings read_settings(const std::string& node_name) {
   return s;
 }
 
-std::string milliseconds(double seconds) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f", seconds * 1e3);
-  return buf;
-}
-
 class FilterNode {
  public:
   FilterNode(ros::NodeHandle& nh, ros::NodeHandle& private_nh, FilterNodeSettings settings)
@@ -127,42 +121,12 @@ class FilterNode {
   }
 
   void publish_diagnostics(const ros::SteadyTimerEvent&) {
-    pipeline::ScanFilterRunner& runner = core_.runner();
-    const pipeline::ScanTimes times = runner.take_times();
-    const pipeline::ScanFilterCounts& c = runner.counts();
-    const FilterCounters f = runner.filter_counters();
-    std::uint8_t level = diagnostic_msgs::DiagnosticStatus::OK;
-    std::string message = std::to_string(times.count) + " scans, " + milliseconds(times.mean_s) +
-                          " ms per scan (mean)";
-    if (window_no_transform_ > 0) {
-      level = diagnostic_msgs::DiagnosticStatus::WARN;
-      message += "; " + std::to_string(window_no_transform_) + " without a sensor pose";
-    } else if (times.count == 0) {
-      message = "no scans";
-    }
-    window_no_transform_ = 0;
     diagnostic_msgs::DiagnosticArray array;
     array.header.stamp = ros::Time::now();
-    array.status.push_back(diagnostic_status(
-        ros::this_node::getName() + ": dynamic filter", level, message,
-        {{"scans in period", std::to_string(times.count)},
-         {"processing time last (ms)", milliseconds(times.last_s)},
-         {"processing time mean (ms)", milliseconds(times.mean_s)},
-         {"processing time max (ms)", milliseconds(times.max_s)},
-         {"scans", std::to_string(c.scans + dropped_)},
-         {"scans filtered", std::to_string(c.filtered)},
-         {"scans without a sensor pose", std::to_string(no_transform_)},
-         {"scans dropped (no sensor pose)", std::to_string(dropped_)},
-         {"scans published unfiltered (no sensor pose)", std::to_string(c.no_pose + c.bad_pose)},
-         {"scans published unfiltered (scanner period not known yet)",
-          std::to_string(c.waiting_period)},
-         {"scans rejected (bad scan)", std::to_string(c.rejected_scan)},
-         {"tracks", std::to_string(c.tracks)},
-         {"beams removed (dynamic)", std::to_string(f.beams_removed_dynamic)},
-         {"beams removed (unknown)", std::to_string(f.beams_removed_unknown)},
-         {"min_points", std::to_string(runner.config().segmentation.min_points)},
-         {"dynamic_weight_limit",
-          std::to_string(runner.config().classification.dynamic_weight_limit)}}));
+    array.status.push_back(
+        to_ros(pipeline::filter_node_status(ros::this_node::getName(), core_.runner(),
+                                            {no_transform_, window_no_transform_, dropped_})));
+    window_no_transform_ = 0;
     diagnostics_pub_.publish(array);
   }
 

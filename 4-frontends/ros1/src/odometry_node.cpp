@@ -189,51 +189,12 @@ class OdometryNode {
   }
 
   void publish_diagnostics(const ros::SteadyTimerEvent&) {
-    const OdometryCounters c = runner_.counters();
-    const auto count = [](const auto& counts, OdometryEvent e) {
-      return std::to_string(counts[static_cast<std::size_t>(e)]);
-    };
-    const pipeline::OdometryArrivals& aw = runner_.arrivals(pipeline::OdometrySource::kWheels);
-    const pipeline::OdometryArrivals& ai = runner_.arrivals(pipeline::OdometrySource::kImu);
-    const auto quiet = [this](pipeline::OdometrySource s) {
-      return std::to_string(runner_.quiet_count(s));
-    };
-    const std::int64_t refused = c.count(OdometryEvent::kRejectedNonFinite) +
-                                 c.count(OdometryEvent::kRejectedOutOfOrder) +
-                                 c.count(OdometryEvent::kNumericalFailure);
+    const std::int64_t refused = pipeline::odometry_refused(runner_);
     diagnostic_msgs::DiagnosticArray array;
     array.header.stamp = ros::Time::now();
-    array.status.push_back(diagnostic_status(
-        ros::this_node::getName() + ": odometry fusion",
-        refused > refused_reported_ ? diagnostic_msgs::DiagnosticStatus::WARN
-                                    : diagnostic_msgs::DiagnosticStatus::OK,
-        std::to_string(published_) + " estimates published",
-        {{"model", odometry_model_name(settings_.odometry.filter.model)},
-         {"estimates published", std::to_string(published_)},
-         {"wheels received", std::to_string(aw.count)},
-         {"imu received", std::to_string(ai.count)},
-         {"wheels accepted", count(c.wheels, OdometryEvent::kAccepted)},
-         {"wheels gated", count(c.wheels, OdometryEvent::kGated)},
-         {"wheels gate overridden", count(c.wheels, OdometryEvent::kGateOverridden)},
-         {"wheels late", count(c.wheels, OdometryEvent::kRejectedOutOfOrder)},
-         {"wheels not finite", count(c.wheels, OdometryEvent::kRejectedNonFinite)},
-         {"wheel messages without both wheels", std::to_string(malformed_)},
-         {"imu accepted", count(c.imu, OdometryEvent::kAccepted)},
-         {"imu gated", count(c.imu, OdometryEvent::kGated)},
-         {"imu late", count(c.imu, OdometryEvent::kRejectedOutOfOrder)},
-         {"imu not finite", count(c.imu, OdometryEvent::kRejectedNonFinite)},
-         {"numerical failures", std::to_string(c.count(OdometryEvent::kNumericalFailure))},
-         {"waiting for reordering", std::to_string(runner_.pending())},
-         {"wheels arrived out of order", std::to_string(aw.out_of_order)},
-         {"imu arrived out of order", std::to_string(ai.out_of_order)},
-         {"wheels largest lag in source (s)", seconds(aw.largest_lag_in_source_s)},
-         {"imu largest lag in source (s)", seconds(ai.largest_lag_in_source_s)},
-         {"wheels largest lag behind newest (s)", seconds(aw.largest_lag_s)},
-         {"imu largest lag behind newest (s)", seconds(ai.largest_lag_s)},
-         {"wheels longest gap (s)", seconds(aw.longest_gap_s)},
-         {"imu longest gap (s)", seconds(ai.longest_gap_s)},
-         {"wheels given up as quiet", quiet(pipeline::OdometrySource::kWheels)},
-         {"imu given up as quiet", quiet(pipeline::OdometrySource::kImu)}}));
+    array.status.push_back(to_ros(pipeline::odometry_node_status(
+        ros::this_node::getName(), odometry_model_name(settings_.odometry.filter.model), runner_,
+        {published_, malformed_, refused > refused_reported_})));
     refused_reported_ = refused;
     diagnostics_pub_.publish(array);
   }

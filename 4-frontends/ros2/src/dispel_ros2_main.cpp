@@ -10,12 +10,13 @@
 // and /tf_static; publishes <scan_topic>_filtered (removed beams NaN) and <scan_topic>_labels
 // (intensities = beam labels), reliable. odometry: subscribes <wheels_topic> (JointState or
 // Odometry) and <imu_topic> (Imu); publishes <odometry_topic> (nav_msgs/Odometry) and, with
-// publish_tf, /tf. The work is FilterNodeCore's and OdometryNodeCore's; this file is the
-// middleware around them. Ctrl-C or SIGTERM stops a node after the message in hand; it then
-// prints its counts. Exit status: 0, 2 for a bad command line or parameter file, 3 for a DDS
-// failure.
+// publish_tf, /tf. Both publish /diagnostics every diagnostics_period_s. The work is
+// FilterNodeCore's and OdometryNodeCore's; this file is the middleware around them. Ctrl-C or
+// SIGTERM stops a node after the message in hand; it then prints its counts. Exit status: 0, 2 for
+// a bad command line or parameter file, 3 for a DDS failure.
 #include <signal.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -155,6 +156,25 @@ class NodeRuntime {
   std::int64_t undecodable() const { return undecodable_; }
   void count_undecodable() { ++undecodable_; }
 
+  /// Publishes on /diagnostics (diagnostic_updater's QoS: reliable, volatile) every @p period_s
+  /// of steady time; call join_graph() after it.
+  void publish_diagnostics_every(double period_s) {
+    diagnostics_.emplace(participant_, "/diagnostics", "diagnostic_msgs/msg/DiagnosticArray",
+                         ros2::Qos::defaults());
+    watch(*diagnostics_, "/diagnostics");
+    diagnostics_period_s_ = period_s;
+  }
+  /// Whether a status is due at @p now_s (the first one a period after the first call).
+  bool diagnostics_due(double now_s) {
+    if (next_diagnostics_s_ == 0.0) next_diagnostics_s_ = now_s + diagnostics_period_s_;
+    if (now_s < next_diagnostics_s_) return false;
+    next_diagnostics_s_ = std::max(next_diagnostics_s_ + diagnostics_period_s_, now_s);
+    return true;
+  }
+  void publish_diagnostics(const pipeline::DiagnosticStatus& status) {
+    diagnostics_->write(io::encode_ros2_diagnostics(ros_time(), {status}));
+  }
+
  private:
   struct Watched {
     const ros2::Reader* reader;
@@ -170,6 +190,9 @@ class NodeRuntime {
   double sim_time_s_ = 0.0;
   std::string distro_;
   std::optional<ros2::Writer> graph_;
+  std::optional<ros2::Writer> diagnostics_;
+  double diagnostics_period_s_ = 1.0;
+  double next_diagnostics_s_ = 0.0;
   std::vector<Watched> watched_;
   double next_report_s_ = 0.0;
   std::int64_t undecodable_ = 0;
@@ -209,6 +232,7 @@ int run_filter(const ros2::FilterNodeSettings& settings) {
   rt.watch(tf_static, "/tf_static");
   rt.watch(filtered, filtered_topic);
   rt.watch(labels, labels_topic);
+  rt.publish_diagnostics_every(settings.diagnostics_period_s);
   rt.join_graph();
   std::fprintf(stderr, "dispel-ros2 filter: %s -> %s, %s\n", settings.scan_topic.c_str(),
                filtered_topic.c_str(), labels_topic.c_str());
@@ -240,6 +264,7 @@ int run_filter(const ros2::FilterNodeSettings& settings) {
     const double now_s = steady_seconds();
     publish(core.poll(now_s));
     rt.report(now_s);
+    if (rt.diagnostics_due(now_s)) rt.publish_diagnostics(core.diagnostics(rt.undecodable()));
   }
   const ros2::FilterNodeCounts& c = core.counts();
   const pipeline::ScanFilterCounts& r = core.runner().counts();
@@ -281,6 +306,7 @@ int run_odometry(const ros2::OdometryNodeSettings& settings) {
   rt.watch(imu, settings.imu_topic);
   rt.watch(odometry, settings.odometry_topic);
   if (tf) rt.watch(*tf, "/tf");
+  rt.publish_diagnostics_every(settings.diagnostics_period_s);
   rt.join_graph();
   std::fprintf(stderr, "dispel-ros2 odometry: %s (%s) + %s -> %s%s\n",
                settings.wheels_topic.c_str(),
@@ -315,6 +341,7 @@ int run_odometry(const ros2::OdometryNodeSettings& settings) {
     const double now_s = steady_seconds();
     publish(core.poll(now_s));
     rt.report(now_s);
+    if (rt.diagnostics_due(now_s)) rt.publish_diagnostics(core.diagnostics(rt.undecodable()));
   }
   publish(core.poll(steady_seconds()));
   const pipeline::OdometryArrivals& aw = core.runner().arrivals(pipeline::OdometrySource::kWheels);

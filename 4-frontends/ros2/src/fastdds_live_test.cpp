@@ -54,6 +54,7 @@
 #include "dispel/pipeline/scan_filter_runner.hpp"
 #include "live_test_support.hpp"
 #include "node_process.hpp"
+#include "ros2_diagnosticsPubSubTypes.h"
 #include "ros2_laser_scanPubSubTypes.h"
 #include "ros2_tfPubSubTypes.h"
 #include "test_files.hpp"
@@ -246,8 +247,10 @@ class CrossVendorSession {
  public:
   CrossVendorSession(const std::string& tag, const std::string& parameters)
       : scan_topic_("/scan_" + tag + std::to_string(::getpid())),
-        node_("filter", parameters + "    scan_topic: " + scan_topic_ + "\n",
-              "dispel_filter_" + tag + std::to_string(::getpid()), domain()),
+        node_name_("dispel_filter_" + tag + std::to_string(::getpid())),
+        node_("filter",
+              parameters + "    scan_topic: " + scan_topic_ + "\n    diagnostics_period_s: 0.1\n",
+              node_name_, domain()),
         driver_(domain()) {}
 
   static int domain() {
@@ -267,11 +270,14 @@ class CrossVendorSession {
     scans_ = driver_.writer<ScanType>(scan_topic_, scan_qos);
     filtered_ = driver_.reader<ScanType>(scan_topic_ + "_filtered", kSensorData);  // SLAM Toolbox
     labels_ = driver_.reader<ScanType>(scan_topic_ + "_labels", kDefaults);
-    ASSERT_TRUE(tf_static_ && tf_ && scans_ && filtered_ && labels_);
+    // As ROS 2's diagnostic_aggregator subscribes.
+    diagnostics_ = driver_.reader<diagnostic_msgs::msg::dds_::DiagnosticArray_PubSubType>(
+        "/diagnostics", kDefaults);
+    ASSERT_TRUE(tf_static_ && tf_ && scans_ && filtered_ && labels_ && diagnostics_);
     ASSERT_TRUE(eventually([&] {
       const std::string log = node_.log();
       return matched(scans_) == 1 && matched(filtered_) == 1 && matched(labels_) == 1 &&
-             matched(tf_) >= 1 && matched(tf_static_) >= 1 &&
+             matched(tf_) >= 1 && matched(tf_static_) >= 1 && matched(diagnostics_) >= 1 &&
              log.find(scan_topic_ + ": 1 publishers matched") != std::string::npos &&
              log.find(scan_topic_ + "_filtered: 1 subscribers matched") != std::string::npos &&
              log.find(scan_topic_ + "_labels: 1 subscribers matched") != std::string::npos;
@@ -300,6 +306,38 @@ class CrossVendorSession {
     expect_equal(f[0], want_filtered, "filtered", k);
     expect_equal(l[0], want_labels, "labels", k);
     ASSERT_FALSE(::testing::Test::HasFailure());
+  }
+
+  /// The node's status on /diagnostics comes to say that @p scans came in, every one with its
+  /// sensor pose, none dropped, nothing undecodable (the node publishes it every 0.1 s).
+  void expect_diagnostics(std::size_t scans) {
+    using Status = diagnostic_msgs::msg::dds_::DiagnosticStatus_;
+    const auto value = [](const Status& s, const std::string& key) {
+      for (const auto& kv : s.values_()) {
+        if (kv.key_() == key) return kv.value_();
+      }
+      return std::string("(no key " + key + ")");
+    };
+    Status last;
+    std::int32_t stamp_s = 0;
+    const bool came = eventually([&] {
+      using Array = diagnostic_msgs::msg::dds_::DiagnosticArray_;
+      for (const Array& a : take<Array>(diagnostics_, 0.0)) {
+        for (const Status& s : a.status_()) {
+          if (s.name_() != node_name_ + ": dynamic filter") continue;  // Another test's node.
+          last = s;
+          stamp_s = a.header_().stamp_().sec_();
+        }
+      }
+      return value(last, "scans") == std::to_string(scans);
+    });
+    ASSERT_TRUE(came) << "last status: " << last.message_() << ", scans " << value(last, "scans");
+    EXPECT_EQ(last.level_(), 0) << last.message_();  // OK
+    EXPECT_GT(stamp_s, 1600000000);                  // ROS time: the system clock.
+    EXPECT_EQ(value(last, "scans without a sensor pose"), "0");
+    EXPECT_EQ(value(last, "scans dropped (queue full)"), "0");
+    EXPECT_EQ(value(last, "undecodable messages"), "0");
+    EXPECT_NE(value(last, "beams removed (dynamic)"), "0");
   }
 
   /// A subscriber asking for what the node's writers do not offer (transient local): the node
@@ -331,6 +369,7 @@ class CrossVendorSession {
   }
 
   std::string scan_topic_;
+  std::string node_name_;
   NodeProcess node_;
   FastDdsProcess driver_;
   fdds::DataWriter* tf_static_ = nullptr;
@@ -338,6 +377,7 @@ class CrossVendorSession {
   fdds::DataWriter* scans_ = nullptr;
   fdds::DataReader* filtered_ = nullptr;
   fdds::DataReader* labels_ = nullptr;
+  fdds::DataReader* diagnostics_ = nullptr;
 };
 
 std::int64_t removed_beams(const io::ScanMessage& filtered) {
@@ -382,6 +422,7 @@ void play_real_recording(const RosQos& scan_qos, const char* tag) {
     removed += removed_beams(want);
   }
   EXPECT_GT(removed, 0);  // The walkers: the comparison saw removals, not only a copy.
+  session.expect_diagnostics(scans.size());
   session.mismatch_and_stop(scans.size());
 }
 
@@ -451,6 +492,7 @@ TEST(Ros2FastDdsLive, AMovingRobotFromAFastDdsDriverAsDispelFilterFiltersIt) {
   EXPECT_LE(pending.size(), 1u);
   EXPECT_GT(sent, 150u);
   EXPECT_GT(removed, 0);
+  session.expect_diagnostics(sent);
   session.mismatch_and_stop(sent);
 }
 

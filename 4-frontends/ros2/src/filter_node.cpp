@@ -44,6 +44,7 @@ FilterNodeSettings parse_filter_node_parameters(const std::vector<ParameterText>
   p.choice("on_missing_transform", policy, {"publish_unfiltered", "drop"});
   s.drop_without_transform = policy == "drop";
   p.integer("queue_size", s.queue_size, 1, 1000000);
+  p.number("diagnostics_period_s", s.diagnostics_period_s, 1e-3, "a finite number >= 0.001");
   p.distribution("ros_distro", s.ros_distro);
   p.boolean("scale_to_scanner", s.runner.scale_to_scanner);
   p.number("scan_period_s", s.runner.scan_period_s, 0.0,
@@ -153,6 +154,7 @@ std::vector<FilterNodeOutput> FilterNodeCore::poll(double now_s) {
     // the first pose or in a gap never will.
     const bool may_come = why == PoseLookup::kEmpty || why == PoseLookup::kAfterLast;
     if (!pose && may_come && now_s - w.since_s < settings_.transform_timeout_s) break;
+    if (!pose) ++counts_.without_pose;
     if (pose || !settings_.drop_without_transform) {
       out.push_back(run(w.message, pose));
     } else {
@@ -167,6 +169,22 @@ std::vector<FilterNodeOutput> FilterNodeCore::poll(double now_s) {
     for (auto& [robot, poses] : motion_) poses.forget_before(out.back().filtered.scan.stamp_s);
   }
   return out;
+}
+
+pipeline::DiagnosticStatus FilterNodeCore::diagnostics(std::int64_t undecodable_elsewhere) {
+  pipeline::DiagnosticStatus s = pipeline::filter_node_status(
+      settings_.node_name, runner_,
+      {counts_.without_pose, counts_.without_pose - without_pose_reported_,
+       counts_.dropped_without_transform});
+  without_pose_reported_ = counts_.without_pose;
+  s.values.insert(
+      s.values.end(),
+      {{"scans dropped (queue full)", std::to_string(counts_.dropped_queue_full)},
+       {"transforms refused", std::to_string(counts_.transforms_refused)},
+       {"undecodable messages", std::to_string(counts_.undecodable + undecodable_elsewhere)},
+       {"times time went backwards", std::to_string(counts_.time_resets)},
+       {"scans without a stamp", std::to_string(counts_.zero_stamps)}});
+  return s;
 }
 
 }  // namespace dispel::ros2

@@ -128,7 +128,7 @@ void check_graph(Participant& test, const std::string& node_name, Writer& driver
     EXPECT_TRUE(listed(node.writer_gid_seq_._buffer, node.writer_gid_seq_._length, g));
   }
   EXPECT_EQ(node.reader_gid_seq_._length, 3u);  // The scans, /tf, /tf_static.
-  EXPECT_EQ(node.writer_gid_seq_._length, 2u);
+  EXPECT_EQ(node.writer_gid_seq_._length, 3u);  // The filtered scans, the labels, /diagnostics.
   dds_return_loan(r, samples, 1);
 }
 

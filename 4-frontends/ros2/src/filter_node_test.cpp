@@ -183,6 +183,38 @@ TEST(Ros2FilterNodeCore, WithoutAPoseInTimeAScanIsPublishedUnfilteredOrDropped) 
   }
 }
 
+// /diagnostics: the filter's status as the ROS 1 node says it, WARN in a period with scans without
+// a sensor pose (published unfiltered or dropped), and what this node counts besides.
+TEST(Ros2FilterNodeCore, DiagnosticsWarnOfScansWithoutAPoseInTheirPeriod) {
+  FilterNodeSettings s;
+  s.node_name = "front_filter";
+  s.transform_timeout_s = 0.1;
+  s.drop_without_transform = true;
+  FilterNodeCore core(s);
+  const auto value = [](const pipeline::DiagnosticStatus& d, const std::string& key) {
+    for (const auto& [k, v] : d.values) {
+      if (k == key) return v;
+    }
+    return std::string("(missing)");
+  };
+  EXPECT_TRUE(core.scan(room_scan(5.0), 10.0, 0.0).empty());
+  EXPECT_TRUE(core.poll(10.2).empty());  // Dropped: no pose within 0.1 s.
+  core.count_undecodable();
+  pipeline::DiagnosticStatus d = core.diagnostics(2);
+  EXPECT_EQ(d.name, "front_filter: dynamic filter");
+  EXPECT_EQ(d.level, pipeline::DiagnosticStatus::Level::kWarn);
+  EXPECT_NE(d.message.find("1 without a sensor pose"), std::string::npos) << d.message;
+  EXPECT_EQ(value(d, "scans"), "1");
+  EXPECT_EQ(value(d, "scans without a sensor pose"), "1");
+  EXPECT_EQ(value(d, "scans dropped (no sensor pose)"), "1");
+  EXPECT_EQ(value(d, "undecodable messages"), "3");
+  EXPECT_EQ(value(d, "scans dropped (queue full)"), "0");
+  // The next period has none: OK again, the totals kept.
+  d = core.diagnostics(2);
+  EXPECT_EQ(d.level, pipeline::DiagnosticStatus::Level::kOk);
+  EXPECT_EQ(value(d, "scans without a sensor pose"), "1");
+}
+
 // A scan before the first pose will never have one: it goes at once. The queue is bounded: the
 // oldest waiting scans are dropped and counted.
 TEST(Ros2FilterNodeCore, ScansThatCanNeverHaveAPoseGoAtOnceAndTheQueueIsBounded) {

@@ -42,6 +42,7 @@ OdometryNodeSettings parse_odometry_node_parameters(const std::vector<ParameterT
   p.number("reorder_window_s", s.reorder_window_s, 0.0, "a finite number >= 0");
   p.number("source_timeout_s", s.source_timeout_s, 1e-3, "a finite number >= 0.001");
   p.integer("queue_size", s.queue_size, 1, 1000000);
+  p.number("diagnostics_period_s", s.diagnostics_period_s, 1e-3, "a finite number >= 0.001");
   p.boolean("use_sim_time", s.use_sim_time);
   p.distribution("ros_distro", s.ros_distro);
   // The filter's keys may share the file (one file for both nodes), as they may share a file
@@ -112,6 +113,16 @@ std::vector<OdometryNodeOutput> OdometryNodeCore::imu(const io::ImuMessage& m, d
 
 std::vector<OdometryNodeOutput> OdometryNodeCore::poll(double now_s) {
   return outputs(runner_.release_at(now_s, settings_.source_timeout_s), settings_, published_);
+}
+
+pipeline::DiagnosticStatus OdometryNodeCore::diagnostics(std::int64_t undecodable) {
+  const std::int64_t refused = pipeline::odometry_refused(runner_);
+  pipeline::DiagnosticStatus s = pipeline::odometry_node_status(
+      settings_.node_name, odometry_model_name(settings_.odometry.filter.model), runner_,
+      {published_, malformed_, refused > refused_reported_});
+  refused_reported_ = refused;
+  s.values.emplace_back("undecodable messages", std::to_string(undecodable));
+  return s;
 }
 
 }  // namespace dispel::ros2

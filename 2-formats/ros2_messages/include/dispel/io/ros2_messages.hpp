@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "dispel/io/recording.hpp"
+#include "dispel/pipeline/node_diagnostics.hpp"
 
 namespace dispel::io {
 
@@ -56,5 +57,9 @@ std::vector<std::uint8_t> encode_ros2(const OdometryMessage& message);
 std::vector<std::uint8_t> encode_ros2(const TransformsMessage& message);
 std::vector<std::uint8_t> encode_ros2(const JointStateMessage& message);
 std::vector<std::uint8_t> encode_ros2(const ImuMessage& message);
+/// diagnostic_msgs/DiagnosticArray: @p status stamped @p stamp (frame_id empty), as the nodes
+/// publish it on /diagnostics.
+std::vector<std::uint8_t> encode_ros2_diagnostics(
+    const Stamp& stamp, const std::vector<pipeline::DiagnosticStatus>& status);
 
 }  // namespace dispel::io

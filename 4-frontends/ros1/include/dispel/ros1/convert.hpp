@@ -16,6 +16,7 @@
 
 #include "dispel/core/dynamic_filter.hpp"
 #include "dispel/core/odometry_fusion.hpp"
+#include "dispel/pipeline/node_diagnostics.hpp"
 
 namespace dispel::ros1 {
 
@@ -36,9 +37,7 @@ geometry_msgs::TransformStamped odometry_transform(const OdometryEstimate& estim
                                                    const std::string& frame_id,
                                                    const std::string& child_frame_id);
 
-/// A diagnostic status with key-value pairs.
-diagnostic_msgs::DiagnosticStatus diagnostic_status(
-    const std::string& name, std::uint8_t level, const std::string& message,
-    const std::vector<std::pair<std::string, std::string>>& values);
+/// A node's diagnostic status (pipeline::filter_node_status, odometry_node_status) as ROS 1's.
+diagnostic_msgs::DiagnosticStatus to_ros(const pipeline::DiagnosticStatus& status);
 
 }  // namespace dispel::ros1

@@ -15,6 +15,7 @@
 #include "dispel/core/pose_buffer.hpp"
 #include "dispel/io/frame_tree.hpp"
 #include "dispel/io/recording.hpp"
+#include "dispel/pipeline/node_diagnostics.hpp"
 #include "dispel/pipeline/scan_filter_runner.hpp"
 #include "dispel/ros2/parameter_text.hpp"
 
@@ -30,6 +31,7 @@ struct FilterNodeSettings {
   bool drop_without_transform = false;  ///< Else published unfiltered.
   bool use_sim_time = false;            ///< ROS time from /clock (a recording played).
   int queue_size = 10;                  ///< Scans waiting for their pose, at most.
+  double diagnostics_period_s = 1.0;    ///< Steady time between two /diagnostics messages.
   /// The ROS 2 distribution whose graph layout (gid size) ros_discovery_info uses; empty: the
   /// environment's ROS_DISTRO, else humble.
   std::string ros_distro;
@@ -58,6 +60,7 @@ struct FilterNodeOutput {
 struct FilterNodeCounts {
   std::int64_t scans_in = 0;
   std::int64_t published = 0;
+  std::int64_t without_pose = 0;               ///< No sensor pose in time (published or dropped).
   std::int64_t dropped_without_transform = 0;  ///< on_missing_transform: drop.
   std::int64_t dropped_queue_full = 0;         ///< The oldest waiting scan, for a newer one.
   std::int64_t transforms_refused = 0;         ///< Not finite, or not after the last one.
@@ -94,6 +97,11 @@ class FilterNodeCore {
   const FilterNodeCounts& counts() const { return counts_; }
   const pipeline::ScanFilterRunner& runner() const { return runner_; }
   void count_undecodable() { ++counts_.undecodable; }
+  /// The node's status on /diagnostics for the period since the last call: the filter's
+  /// (pipeline::filter_node_status, as the ROS 1 node says it; WARN for scans without a sensor
+  /// pose in the period) and what this node counts besides. @p undecodable_elsewhere: messages
+  /// refused outside the core (/clock).
+  pipeline::DiagnosticStatus diagnostics(std::int64_t undecodable_elsewhere);
   /// The transforms of the robot's motion kept (all robot frames).
   std::size_t motion_kept() const;
 
@@ -113,6 +121,7 @@ class FilterNodeCore {
   std::map<std::string, PoseBuffer> motion_;  // By child frame: its pose in the fixed frame.
   std::deque<Waiting> waiting_;
   FilterNodeCounts counts_;
+  std::int64_t without_pose_reported_ = 0;  // By the last diagnostics().
 };
 
 }  // namespace dispel::ros2

@@ -12,6 +12,7 @@
 
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/recording.hpp"
+#include "dispel/pipeline/node_diagnostics.hpp"
 #include "dispel/pipeline/odometry_runner.hpp"
 #include "dispel/ros2/parameter_text.hpp"
 
@@ -26,10 +27,11 @@ struct OdometryNodeSettings {
   std::string odometry_topic = "/odometry/filtered";
   std::string odom_frame = "odom";
   std::string base_frame = "base_link";
-  bool publish_tf = false;         ///< Also odom_frame -> base_frame on /tf.
-  double reorder_window_s = 0.05;  ///< Stamp time measurements wait for both sources.
-  double source_timeout_s = 0.5;   ///< Steady time a silent source is waited for.
-  int queue_size = 100;            ///< Of the readers (best effort: the oldest go when full).
+  bool publish_tf = false;            ///< Also odom_frame -> base_frame on /tf.
+  double reorder_window_s = 0.05;     ///< Stamp time measurements wait for both sources.
+  double source_timeout_s = 0.5;      ///< Steady time a silent source is waited for.
+  int queue_size = 100;               ///< Of the readers (best effort: the oldest go when full).
+  double diagnostics_period_s = 1.0;  ///< Steady time between two /diagnostics messages.
   bool use_sim_time = false;
   std::string ros_distro;  ///< As FilterNodeSettings::ros_distro.
   io::OdometrySettings odometry;
@@ -72,12 +74,17 @@ class OdometryNodeCore {
   std::int64_t published() const { return published_; }
   /// JointState messages without both wheels' velocities.
   std::int64_t malformed() const { return malformed_; }
+  /// The node's status on /diagnostics (pipeline::odometry_node_status, as the ROS 1 node says
+  /// it; WARN when measurements were refused since the last call). @p undecodable: messages the
+  /// node could not decode.
+  pipeline::DiagnosticStatus diagnostics(std::int64_t undecodable);
 
  private:
   OdometryNodeSettings settings_;
   pipeline::OdometryRunner runner_;
   std::int64_t published_ = 0;
   std::int64_t malformed_ = 0;
+  std::int64_t refused_reported_ = 0;  // By the last diagnostics().
 };
 
 }  // namespace dispel::ros2

@@ -69,6 +69,7 @@ class NodeRuntime {
       clock_.emplace(
           participant_, "/clock", "rosgraph_msgs/msg/Clock",
           ros2::Qos{ros2::Qos::Reliability::kBestEffort, ros2::Qos::Durability::kVolatile, 1});
+      watch(*clock_, "/clock");
     }
     distro_ = ros_distro;  // Checked when the parameters were read.
     if (distro_.empty()) {

@@ -40,6 +40,7 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -54,6 +55,7 @@
 #include "dispel/pipeline/scan_filter_runner.hpp"
 #include "live_test_support.hpp"
 #include "node_process.hpp"
+#include "ros2_clockPubSubTypes.h"
 #include "ros2_diagnosticsPubSubTypes.h"
 #include "ros2_laser_scanPubSubTypes.h"
 #include "ros2_tfPubSubTypes.h"
@@ -83,6 +85,7 @@ constexpr RosQos kSensorData{false, false, 5};   // rmw_qos_profile_sensor_data
 constexpr RosQos kTfStatic{true, true, 1};       // tf2_ros::StaticTransformBroadcaster
 constexpr RosQos kTf{true, false, 100};          // tf2_ros::TransformBroadcaster
 constexpr RosQos kLatchedReader{true, true, 1};  // asks for a durability the node does not offer
+constexpr RosQos kClock{false, false, 1};        // rclcpp::ClockQoS
 
 template <class Qos>
 void set_ros_qos(Qos& q, const RosQos& p) {
@@ -291,6 +294,15 @@ class CrossVendorSession {
   /// @p want's (fatal failures).
   void exchange(const io::ScanMessage& scan, const io::ScanMessage& want_filtered,
                 const io::ScanMessage& want_labels, std::size_t k) {
+    FastScan f, l;
+    ASSERT_NO_FATAL_FAILURE(send(scan, k, f, l));
+    expect_equal(f, want_filtered, "filtered", k);
+    expect_equal(l, want_labels, "labels", k);
+    ASSERT_FALSE(::testing::Test::HasFailure());
+  }
+
+  /// Sends @p scan (the @p k th), then takes the node's filtered scan and labels for it.
+  void send(const io::ScanMessage& scan, std::size_t k, FastScan& filtered, FastScan& labels) {
     FastScan sample = to_fastdds(scan);
     ASSERT_TRUE(scans_->write(&sample));
     std::vector<FastScan> f, l;
@@ -303,34 +315,62 @@ class CrossVendorSession {
     ASSERT_TRUE(!f.empty() && !l.empty()) << "scan " << k << "\n" << node_.log();
     ASSERT_EQ(f.size(), 1u) << k;
     ASSERT_EQ(l.size(), 1u) << k;
-    expect_equal(f[0], want_filtered, "filtered", k);
-    expect_equal(l[0], want_labels, "labels", k);
-    ASSERT_FALSE(::testing::Test::HasFailure());
+    filtered = f[0];
+    labels = l[0];
   }
 
-  /// The node's status on /diagnostics comes to say that @p scans came in, every one with its
-  /// sensor pose, none dropped, nothing undecodable (the node publishes it every 0.1 s).
-  void expect_diagnostics(std::size_t scans) {
-    using Status = diagnostic_msgs::msg::dds_::DiagnosticStatus_;
-    const auto value = [](const Status& s, const std::string& key) {
-      for (const auto& kv : s.values_()) {
-        if (kv.key_() == key) return kv.value_();
-      }
-      return std::string("(no key " + key + ")");
-    };
-    Status last;
-    std::int32_t stamp_s = 0;
-    const bool came = eventually([&] {
+  /// A /clock publisher as `ros2 bag play --clock` makes one (best effort, keep last 1), once
+  /// the node (use_sim_time) has matched it.
+  void start_clock() {
+    clock_ = driver_.writer<rosgraph_msgs::msg::dds_::Clock_PubSubType>("/clock", kClock);
+    ASSERT_NE(clock_, nullptr);
+    ASSERT_TRUE(eventually([&] {
+      return matched(clock_) == 1 &&
+             node_.log().find("/clock: 1 publishers matched") != std::string::npos;
+    })) << node_.log();
+  }
+  void clock(const io::Stamp& t) {
+    rosgraph_msgs::msg::dds_::Clock_ c;
+    c.clock_().sec_(static_cast<std::int32_t>(t.sec));
+    c.clock_().nanosec_(t.nsec);
+    ASSERT_TRUE(clock_->write(&c));
+  }
+
+  using Status = diagnostic_msgs::msg::dds_::DiagnosticStatus_;
+  static std::string value(const Status& s, const std::string& key) {
+    for (const auto& kv : s.values_()) {
+      if (kv.key_() == key) return kv.value_();
+    }
+    return "(no key " + key + ")";
+  }
+  /// Takes the node's statuses on /diagnostics, calling @p tick between looks, until one whose
+  /// header stamp (whole seconds) and contents satisfy @p done; @p last is the last of this
+  /// node's seen and @p stamp_s its stamp. False when none did within kWaitS.
+  bool status_until(const std::function<bool(const Status&, std::int32_t)>& done,
+                    const std::function<void()>& tick, Status& last, std::int32_t& stamp_s) {
+    return eventually([&] {
+      if (tick) tick();
       using Array = diagnostic_msgs::msg::dds_::DiagnosticArray_;
       for (const Array& a : take<Array>(diagnostics_, 0.0)) {
         for (const Status& s : a.status_()) {
           if (s.name_() != node_name_ + ": dynamic filter") continue;  // Another test's node.
           last = s;
           stamp_s = a.header_().stamp_().sec_();
+          if (done(last, stamp_s)) return true;
         }
       }
-      return value(last, "scans") == std::to_string(scans);
+      return false;
     });
+  }
+
+  /// The node's status on /diagnostics comes to say that @p scans came in, every one with its
+  /// sensor pose, none dropped, nothing undecodable (the node publishes it every 0.1 s).
+  void expect_diagnostics(std::size_t scans) {
+    Status last;
+    std::int32_t stamp_s = 0;
+    const bool came = status_until(
+        [&](const Status& s, std::int32_t) { return value(s, "scans") == std::to_string(scans); },
+        {}, last, stamp_s);
     ASSERT_TRUE(came) << "last status: " << last.message_() << ", scans " << value(last, "scans");
     EXPECT_EQ(last.level_(), 0) << last.message_();  // OK
     EXPECT_GT(stamp_s, 1600000000);                  // ROS time: the system clock.
@@ -378,6 +418,7 @@ class CrossVendorSession {
   fdds::DataReader* filtered_ = nullptr;
   fdds::DataReader* labels_ = nullptr;
   fdds::DataReader* diagnostics_ = nullptr;
+  fdds::DataWriter* clock_ = nullptr;
 };
 
 std::int64_t removed_beams(const io::ScanMessage& filtered) {
@@ -493,6 +534,60 @@ TEST(Ros2FastDdsLive, AMovingRobotFromAFastDdsDriverAsDispelFilterFiltersIt) {
   EXPECT_GT(sent, 150u);
   EXPECT_GT(removed, 0);
   session.expect_diagnostics(sent);
+  session.mismatch_and_stop(sent);
+}
+
+// use_sim_time across vendors: ROS time is what a Fast DDS /clock publisher says, as under
+// `ros2 bag play --clock`. The scans come without stamps (a driver without a clock): the node
+// filters each at the ROS time it came and publishes it with its zero stamp kept; its
+// /diagnostics are stamped with /clock's time. Then the clock goes back, as when a replay starts
+// again, and the node's time follows it. (Which /clock sample a scan meets is the wire's to
+// decide, so the scans' filtering is not compared here; the moving robot above compares it.)
+TEST(Ros2FastDdsLive, UseSimTimeTakesRosTimeFromAFastDdsClockThroughAReset) {
+  auto reader = jobs::open_recording(
+      test::source_path("data/leg_tracker/demo_stationary_simple_environment.bag"));
+  std::vector<io::ScanMessage> scans;
+  reader->read({"/scan"}, [&](const io::RecordedMessage& m) {
+    if (auto s = m.scan(); s && scans.size() < 40) scans.push_back(*s);
+  });
+  ASSERT_EQ(scans.size(), 40u);
+  for (io::ScanMessage& s : scans) s.header.stamp = io::Stamp{};  // No clock on the driver.
+
+  CrossVendorSession session("fc",
+                             "/**:\n  ros__parameters:\n    static_sensor: true\n"
+                             "    use_sim_time: true\n");
+  ASSERT_NO_FATAL_FAILURE(session.start(kSensorData));
+  ASSERT_NO_FATAL_FAILURE(session.start_clock());
+  // Two runs of the recording's clock: from 5000 s, then from 100 s (the replay again).
+  std::size_t sent = 0;
+  for (const std::int64_t start_s : {5000, 100}) {
+    SCOPED_TRACE("clock from " + std::to_string(start_s) + " s");
+    io::Stamp now{start_s, 0};
+    const auto tick = [&] {
+      now = io::Stamp::from_seconds(now.seconds() + 0.01);
+      session.clock(now);
+    };
+    for (int k = 0; k < 20; ++k, ++sent) {
+      tick();
+      FastScan f, l;
+      ASSERT_NO_FATAL_FAILURE(session.send(scans[sent], sent, f, l));
+      EXPECT_EQ(f.header_().stamp_().sec_(), 0);  // Published as it came.
+      EXPECT_EQ(f.header_().stamp_().nanosec_(), 0u);
+      EXPECT_EQ(f.ranges_().size(), scans[sent].scan.ranges_m.size());
+    }
+    CrossVendorSession::Status last;
+    std::int32_t stamp_s = 0;
+    const std::string all = std::to_string(sent);
+    ASSERT_TRUE(session.status_until(
+        [&](const CrossVendorSession::Status& s, std::int32_t t) {
+          return t >= start_s && t < start_s + 60 &&
+                 CrossVendorSession::value(s, "scans without a stamp") == all;
+        },
+        tick, last, stamp_s))
+        << "last status at " << stamp_s
+        << " s: " << CrossVendorSession::value(last, "scans without a stamp")
+        << " scans without a stamp";
+  }
   session.mismatch_and_stop(sent);
 }
 

@@ -30,6 +30,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
@@ -301,6 +302,21 @@ class CrossVendorSession {
     ASSERT_FALSE(::testing::Test::HasFailure());
   }
 
+  /// Writes @p scan and does not wait.
+  void write(const io::ScanMessage& scan) {
+    FastScan sample = to_fastdds(scan);
+    ASSERT_TRUE(scans_->write(&sample));
+  }
+  /// The label scans that came within @p wait_s of each other.
+  std::vector<FastScan> take_labels(double wait_s) {
+    std::vector<FastScan> out;
+    for (std::vector<FastScan> got = take<FastScan>(labels_, wait_s); !got.empty();
+         got = take<FastScan>(labels_, wait_s)) {
+      out.insert(out.end(), got.begin(), got.end());
+    }
+    return out;
+  }
+
   /// Sends @p scan (the @p k th), then takes the node's filtered scan and labels for it.
   void send(const io::ScanMessage& scan, std::size_t k, FastScan& filtered, FastScan& labels) {
     FastScan sample = to_fastdds(scan);
@@ -383,7 +399,8 @@ class CrossVendorSession {
   /// A subscriber asking for what the node's writers do not offer (transient local): the node
   /// says so in its log, and Fast DDS's side sees the same mismatch. Then SIGTERM: exit 0, with
   /// @p scans in and published.
-  void mismatch_and_stop(std::size_t scans) {
+  void mismatch_and_stop(std::size_t scans) { mismatch_and_stop(scans, scans); }
+  void mismatch_and_stop(std::size_t scans, std::size_t published) {
     fdds::DataReader* latched = driver_.reader<sensor_msgs::msg::dds_::LaserScan_PubSubType>(
         scan_topic_ + "_filtered", kLatchedReader);
     ASSERT_NE(latched, nullptr);
@@ -398,7 +415,7 @@ class CrossVendorSession {
     }));
     EXPECT_EQ(node_.stop(), 0) << node_.log();
     const std::string counts =
-        std::to_string(scans) + " scans in, " + std::to_string(scans) + " published";
+        std::to_string(scans) + " scans in, " + std::to_string(published) + " published";
     EXPECT_NE(node_.log().find(counts), std::string::npos) << node_.log();
   }
 
@@ -589,6 +606,93 @@ TEST(Ros2FastDdsLive, UseSimTimeTakesRosTimeFromAFastDdsClockThroughAReset) {
         << " scans without a stamp";
   }
   session.mismatch_and_stop(sent);
+}
+
+// A flood: a driver writes the recording's 1265 scans as fast as it can (their stamps 1 ms
+// apart), while no transform gives them a pose, so every scan the node takes has to wait. The
+// node keeps at most queue_size (3) of them: it drops the oldest and counts them, and its
+// memory for waiting scans stays bounded, however many come. (How many the node takes is DDS's
+// and the scheduler's to decide: its reader is best effort, keep last 5, as a driver's sensor
+// data is read. What must hold is the bound and the count.) Then the transforms come, and the
+// three waiting scans are filtered and published.
+TEST(Ros2FastDdsLive, AFloodOfScansWithoutPosesIsDroppedAndCountedNotQueued) {
+  auto reader = jobs::open_recording(
+      test::source_path("data/leg_tracker/demo_stationary_simple_environment.bag"));
+  std::vector<io::ScanMessage> scans;
+  reader->read({"/scan"}, [&](const io::RecordedMessage& m) {
+    if (auto s = m.scan()) scans.push_back(*s);
+  });
+  ASSERT_GT(scans.size(), 1000u);
+  const double t0 = scans.front().header.stamp.seconds();
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    scans[k].header.stamp = io::Stamp::from_seconds(t0 + 0.001 * static_cast<double>(k));
+    scans[k].scan.stamp_s = scans[k].header.stamp.seconds();
+  }
+  const double t_end = scans.back().header.stamp.seconds();
+
+  // At least the 5 scans the node's reader keeps reach the node, however loaded the machine.
+  constexpr int kQueue = 3;
+  CrossVendorSession session("ff",
+                             "/**:\n  ros__parameters:\n    queue_size: " + std::to_string(kQueue) +
+                                 "\n    transform_timeout_s: 1000.0\n");
+  ASSERT_NO_FATAL_FAILURE(session.start(kSensorData));
+  const std::string laser = scans.front().header.frame_id;
+  session.tf_static({scans.front().header.stamp, "base_link", laser, Pose2{}});
+  for (const io::ScanMessage& s : scans) ASSERT_NO_FATAL_FAILURE(session.write(s));
+
+  // The flood is over once the node's count has not grown for 1 s (ten statuses): every write
+  // returned long before, and what is on the loopback reaches the node within milliseconds.
+  CrossVendorSession::Status last;
+  std::int32_t stamp_s = 0;
+  std::string received_before;
+  auto unchanged_since = std::chrono::steady_clock::now();
+  ASSERT_TRUE(session.status_until(
+      [&](const CrossVendorSession::Status& s, std::int32_t) {
+        const std::string received = CrossVendorSession::value(s, "scans received");
+        if (received != received_before) {
+          received_before = received;
+          unchanged_since = std::chrono::steady_clock::now();
+        }
+        return std::stoll(received) > kQueue &&
+               std::chrono::steady_clock::now() - unchanged_since > std::chrono::seconds(1);
+      },
+      {}, last, stamp_s))
+      << CrossVendorSession::value(last, "scans received") << " scans received";
+  const long long received = std::stoll(CrossVendorSession::value(last, "scans received"));
+  std::printf("flood: %lld of %zu scans reached the node\n", received, scans.size());
+  EXPECT_EQ(CrossVendorSession::value(last, "scans waiting for a sensor pose"),
+            std::to_string(kQueue));
+  EXPECT_EQ(CrossVendorSession::value(last, "scans dropped (queue full)"),
+            std::to_string(received - kQueue));
+  EXPECT_EQ(CrossVendorSession::value(last, "scans"), "0");  // None filtered yet.
+
+  // The robot's motion over the flood's stamps, every 0.25 s: the ten get their poses.
+  for (double t = t0 - 0.25; t < t_end + 0.5; t += 0.25) {
+    session.tf({io::Stamp::from_seconds(t), "odom", "base_link", Pose2{}});
+  }
+  std::vector<FastScan> labels;
+  ASSERT_TRUE(eventually([&] {
+    for (FastScan& l : session.take_labels(0.05)) labels.push_back(std::move(l));
+    return labels.size() >= static_cast<std::size_t>(kQueue);
+  }));
+  ASSERT_EQ(labels.size(), static_cast<std::size_t>(kQueue));
+  // The newest the node took, in order.
+  for (std::size_t k = 1; k < labels.size(); ++k) {
+    const auto stamp = [](const FastScan& s) {
+      return io::Stamp{s.header_().stamp_().sec_(), s.header_().stamp_().nanosec_()};
+    };
+    EXPECT_TRUE(stamp(labels[k - 1]) < stamp(labels[k])) << k;
+  }
+  ASSERT_TRUE(session.status_until(
+      [&](const CrossVendorSession::Status& s, std::int32_t) {
+        return CrossVendorSession::value(s, "scans") == std::to_string(kQueue) &&
+               CrossVendorSession::value(s, "scans waiting for a sensor pose") == "0";
+      },
+      {}, last, stamp_s));
+  EXPECT_EQ(CrossVendorSession::value(last, "scans received"), std::to_string(received));
+  EXPECT_EQ(CrossVendorSession::value(last, "scans dropped (queue full)"),
+            std::to_string(received - kQueue));
+  session.mismatch_and_stop(static_cast<std::size_t>(received), kQueue);
 }
 
 }  // namespace

@@ -179,7 +179,9 @@ pipeline::DiagnosticStatus FilterNodeCore::diagnostics(std::int64_t undecodable_
   without_pose_reported_ = counts_.without_pose;
   s.values.insert(
       s.values.end(),
-      {{"scans dropped (queue full)", std::to_string(counts_.dropped_queue_full)},
+      {{"scans received", std::to_string(counts_.scans_in)},
+       {"scans waiting for a sensor pose", std::to_string(waiting_.size())},
+       {"scans dropped (queue full)", std::to_string(counts_.dropped_queue_full)},
        {"transforms refused", std::to_string(counts_.transforms_refused)},
        {"undecodable messages", std::to_string(counts_.undecodable + undecodable_elsewhere)},
        {"times time went backwards", std::to_string(counts_.time_resets)},

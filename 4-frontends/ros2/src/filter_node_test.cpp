@@ -209,6 +209,8 @@ TEST(Ros2FilterNodeCore, DiagnosticsWarnOfScansWithoutAPoseInTheirPeriod) {
   EXPECT_EQ(value(d, "scans dropped (no sensor pose)"), "1");
   EXPECT_EQ(value(d, "undecodable messages"), "3");
   EXPECT_EQ(value(d, "scans dropped (queue full)"), "0");
+  EXPECT_EQ(value(d, "scans received"), "1");
+  EXPECT_EQ(value(d, "scans waiting for a sensor pose"), "0");
   // The next period has none: OK again, the totals kept.
   d = core.diagnostics(2);
   EXPECT_EQ(d.level, pipeline::DiagnosticStatus::Level::kOk);

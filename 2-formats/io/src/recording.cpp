@@ -140,6 +140,20 @@ OdometryMessage odometry_message(double stamp_s, const std::string& frame_id,
   return m;
 }
 
+OdometryMessage odometry_message(const OdometryEstimate& e, const std::string& frame_id,
+                                 const std::string& child_frame_id) {
+  const auto or_zero = [](double v) { return std::isfinite(v) ? v : 0.0; };
+  OdometryMessage m =
+      odometry_message(e.t_s, frame_id, child_frame_id, e.pose(), e.v_mps, e.omega_radps);
+  m.vy_mps = e.lateral_velocity_mps;
+  m.pose_covariance[0] = or_zero(e.x_variance_m2);
+  m.pose_covariance[7] = or_zero(e.y_variance_m2);
+  m.pose_covariance[35] = or_zero(e.yaw_variance_rad2);
+  m.twist_covariance[0] = or_zero(e.v_variance_m2ps2);
+  m.twist_covariance[35] = or_zero(e.omega_variance_rad2ps2);
+  return m;
+}
+
 ScanMessage filtered_message(const ScanMessage& original, const FilterResult& result) {
   ScanMessage msg = original;
   if (result.filtered.ranges_m.size() == msg.scan.ranges_m.size()) {

@@ -115,7 +115,10 @@ OdometryMessage to_message(const nav_msgs::Odometry& msg) {
   m.child_frame_id = msg.child_frame_id;
   m.pose = from_ros(msg.pose.pose);
   m.v_mps = msg.twist.twist.linear.x;
+  m.vy_mps = msg.twist.twist.linear.y;
   m.w_radps = msg.twist.twist.angular.z;
+  std::copy(msg.pose.covariance.begin(), msg.pose.covariance.end(), m.pose_covariance.begin());
+  std::copy(msg.twist.covariance.begin(), msg.twist.covariance.end(), m.twist_covariance.begin());
   return m;
 }
 
@@ -125,7 +128,10 @@ nav_msgs::Odometry to_ros(const OdometryMessage& m) {
   msg.child_frame_id = m.child_frame_id;
   msg.pose.pose = pose_to_ros(m.pose);
   msg.twist.twist.linear.x = m.v_mps;
+  msg.twist.twist.linear.y = m.vy_mps;
   msg.twist.twist.angular.z = m.w_radps;
+  std::copy(m.pose_covariance.begin(), m.pose_covariance.end(), msg.pose.covariance.begin());
+  std::copy(m.twist_covariance.begin(), m.twist_covariance.end(), msg.twist.covariance.begin());
   return msg;
 }
 

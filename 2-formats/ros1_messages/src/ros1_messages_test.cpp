@@ -92,6 +92,21 @@ TEST(Ros1Messages, EveryMessageRoundTripsThroughTheRecordingModel) {
   EXPECT_EQ(om.v_mps, 0.4);
   EXPECT_EQ(om.w_radps, -0.2);
   EXPECT_EQ(to_ros(om).header.stamp, od.header.stamp);
+  // The covariances and the lateral speed go through whole, both ways.
+  nav_msgs::Odometry with_covariance = od;
+  for (std::size_t i = 0; i < 36; ++i) {
+    with_covariance.pose.covariance[i] = 0.5 + static_cast<double>(i);
+    with_covariance.twist.covariance[i] = -1.0 - static_cast<double>(i);
+  }
+  with_covariance.twist.twist.linear.y = 0.25;
+  const OdometryMessage oc = to_message(with_covariance);
+  EXPECT_EQ(oc.pose_covariance[35], 35.5);
+  EXPECT_EQ(oc.twist_covariance[7], -8.0);
+  EXPECT_EQ(oc.vy_mps, 0.25);
+  const nav_msgs::Odometry back_c = to_ros(oc);
+  EXPECT_EQ(back_c.pose.covariance, with_covariance.pose.covariance);
+  EXPECT_EQ(back_c.twist.covariance, with_covariance.twist.covariance);
+  EXPECT_EQ(back_c.twist.twist.linear.y, 0.25);
 
   tf2_msgs::TFMessage tf =
       to_ros(TransformsMessage{{{Stamp{5, 1}, "base_link", "laser", {0.2, -0.1, 0.5}}}});

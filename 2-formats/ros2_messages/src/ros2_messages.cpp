@@ -364,14 +364,14 @@ OdometryMessage decode_ros2_odometry(const std::uint8_t* data, std::size_t size)
     m.header = r.header();
     m.child_frame_id = r.string();
     m.pose = read_planar(r);
-    (void)r.doubles<36>();
+    m.pose_covariance = r.doubles<36>();
     m.v_mps = r.read<double>();
-    (void)r.read<double>();
+    m.vy_mps = r.read<double>();
     (void)r.read<double>();
     (void)r.read<double>();
     (void)r.read<double>();
     m.w_radps = r.read<double>();
-    (void)r.doubles<36>();
+    m.twist_covariance = r.doubles<36>();
     return m;
   });
 }
@@ -467,11 +467,12 @@ std::vector<std::uint8_t> encode_ros2(const OdometryMessage& m) {
   w.header(m.header);
   w.string(m.child_frame_id);
   w.planar(m.pose);
-  w.zeros(36);
+  for (double c : m.pose_covariance) w.write<double>(c);
   w.write<double>(m.v_mps);
-  w.zeros(4);
+  w.write<double>(m.vy_mps);
+  w.zeros(3);
   w.write<double>(m.w_radps);
-  w.zeros(36);
+  for (double c : m.twist_covariance) w.write<double>(c);
   return w.take();
 }
 

@@ -120,6 +120,32 @@ TEST(Ros2Messages, OdometryTransformsJointStatesAndImuComeBack) {
   EXPECT_DOUBLE_EQ(od.v_mps, 0.4);
   EXPECT_DOUBLE_EQ(od.w_radps, -0.1);
 
+  // A fused estimate: its lateral speed and variances go into the message and come back.
+  OdometryEstimate e;
+  e.t_s = 3.5;
+  e.x_m = 1.0;
+  e.v_mps = 0.5;
+  e.lateral_velocity_mps = 0.125;
+  e.omega_radps = 0.25;
+  e.x_variance_m2 = 0.01;
+  e.y_variance_m2 = 0.02;
+  e.yaw_variance_rad2 = 0.03;
+  e.v_variance_m2ps2 = 0.04;  // omega's stays unknown (NaN): published as 0.
+  const OdometryMessage oe = odometry_message(e, "odom", "base_link");
+  const OdometryMessage ode = [&] {
+    const auto b = encode_ros2(oe);
+    return decode_ros2_odometry(b.data(), b.size());
+  }();
+  EXPECT_EQ(ode.vy_mps, 0.125);
+  EXPECT_EQ(ode.w_radps, 0.25);
+  std::array<double, 36> pose{}, twist{};
+  pose[0] = 0.01;   // x
+  pose[7] = 0.02;   // y
+  pose[35] = 0.03;  // yaw
+  twist[0] = 0.04;  // forward speed
+  EXPECT_EQ(ode.pose_covariance, pose);
+  EXPECT_EQ(ode.twist_covariance, twist);
+
   TransformsMessage t;
   t.transforms.push_back({{3, 4}, "odom", "base_link", {0.1, 0.2, -0.3}});
   t.transforms.push_back({{3, 5}, "base_link", "laser", {0.2, -0.1, 0.3}});

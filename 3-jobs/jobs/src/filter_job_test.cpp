@@ -66,7 +66,9 @@ void filter_recorded_bag(const std::optional<std::string>& config, WallsAndWalke
   // The scans, the filtered scans, their labels and (when the registration is on) their poses.
   const bool registered = stats.config.registration.enabled;
   EXPECT_EQ(out.count.size(), registered ? 4u : 3u);
-  if (registered) EXPECT_EQ(out.count.at("/scan_pose"), 1265u);
+  if (registered) {
+    EXPECT_EQ(out.count.at("/scan_pose"), 1265u);
+  }
   const auto& scans = out.scans.at("/scan");
   const auto& filtered = out.scans.at("/scan_filtered");
   const auto& labels = out.scans.at("/scan_labels");

@@ -201,7 +201,8 @@ TEST(SimPipeline, DrivingRobotAlongRoughCorridorsKeepsItsWalls) {
   EXPECT_GE(r.preservation_rate(), 0.985);
   EXPECT_GE(r.rejection_rate(), 0.75);
   // The first scans fall back to the odometry while the map is young (measured 443 of 457).
-  EXPECT_GE(static_cast<double>(stats.counters.scans_registered), 0.95 * stats.scans);
+  EXPECT_GE(static_cast<double>(stats.counters.scans_registered),
+            0.95 * static_cast<double>(stats.scans));
   EXPECT_EQ(stats.counters.scans_without_odometry, 0);
   std::remove(bag.c_str());
   std::remove(o.output.c_str());

@@ -38,8 +38,6 @@ geometry_msgs::Point point(const Eigen::Vector2d& p) {
   return out;
 }
 
-double or_zero(double v) { return std::isfinite(v) ? v : 0.0; }
-
 }  // namespace
 
 visualization_msgs::MarkerArray object_markers(const std::vector<TrackedObject>& tracks,
@@ -101,15 +99,7 @@ visualization_msgs::MarkerArray object_markers(const std::vector<TrackedObject>&
 
 nav_msgs::Odometry odometry_message(const OdometryEstimate& e, const std::string& frame_id,
                                     const std::string& child_frame_id) {
-  nav_msgs::Odometry m =
-      io::to_ros_odometry(e.t_s, frame_id, child_frame_id, e.pose(), e.v_mps, e.omega_radps);
-  m.twist.twist.linear.y = e.lateral_velocity_mps;
-  m.pose.covariance[0] = or_zero(e.x_variance_m2);
-  m.pose.covariance[7] = or_zero(e.y_variance_m2);
-  m.pose.covariance[35] = or_zero(e.yaw_variance_rad2);
-  m.twist.covariance[0] = or_zero(e.v_variance_m2ps2);
-  m.twist.covariance[35] = or_zero(e.omega_variance_rad2ps2);
-  return m;
+  return io::to_ros(io::odometry_message(e, frame_id, child_frame_id));
 }
 
 geometry_msgs::TransformStamped odometry_transform(const OdometryEstimate& e,

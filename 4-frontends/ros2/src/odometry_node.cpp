@@ -65,12 +65,7 @@ std::vector<OdometryNodeOutput> outputs(const std::vector<OdometryEstimate>& est
   out.reserve(estimates.size());
   for (const OdometryEstimate& e : estimates) {
     OdometryNodeOutput o;
-    o.odometry.header.stamp = io::Stamp::from_seconds(e.t_s);
-    o.odometry.header.frame_id = s.odom_frame;
-    o.odometry.child_frame_id = s.base_frame;
-    o.odometry.pose = e.pose();
-    o.odometry.v_mps = e.v_mps;
-    o.odometry.w_radps = e.omega_radps;
+    o.odometry = io::odometry_message(e, s.odom_frame, s.base_frame);
     o.transform.transforms.push_back(
         {o.odometry.header.stamp, s.odom_frame, s.base_frame, o.odometry.pose});
     out.push_back(std::move(o));

@@ -119,13 +119,7 @@ TEST(Ros2OdometryNodeLive, FusesTheHuskyRecordingLikeTheSharedRunner) {
   ASSERT_GT(want.size(), 10000u);
   ASSERT_EQ(got.size(), want.size());
   for (std::size_t k = 0; k < want.size(); ++k) {
-    io::OdometryMessage m;
-    m.header.stamp = io::Stamp::from_seconds(want[k].t_s);
-    m.header.frame_id = "odom";
-    m.child_frame_id = "base_link";
-    m.pose = want[k].pose();
-    m.v_mps = want[k].v_mps;
-    m.w_radps = want[k].omega_radps;
+    const io::OdometryMessage m = io::odometry_message(want[k], "odom", "base_link");
     ASSERT_EQ(got[k], io::encode_ros2(m)) << "estimate " << k;
   }
   EXPECT_EQ(node.stop(), 0) << node.log();

@@ -6,6 +6,7 @@
 /// them in dispel::io_ros1_bags; a new format plugs in the same way (docs/architecture.md).
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -16,6 +17,7 @@
 
 #include "dispel/core/dynamic_filter.hpp"
 #include "dispel/core/laser_scan.hpp"
+#include "dispel/core/odometry_fusion.hpp"
 #include "dispel/core/pose2.hpp"
 
 namespace dispel::io {
@@ -50,13 +52,17 @@ struct ScanMessage {
   float scan_time = 0.0F;  ///< The period the scanner states; 0 when it states none.
 };
 
-/// nav_msgs/Odometry, its planar part: the pose of child_frame_id in header.frame_id.
+/// nav_msgs/Odometry, its planar part: the pose of child_frame_id in header.frame_id, and the
+/// covariances whole (row-major, x y z roll pitch yaw), so that they go through a conversion.
 struct OdometryMessage {
   Header header;
   std::string child_frame_id;
   Pose2 pose;
   double v_mps = 0.0;    ///< twist.linear.x
+  double vy_mps = 0.0;   ///< twist.linear.y
   double w_radps = 0.0;  ///< twist.angular.z
+  std::array<double, 36> pose_covariance{};
+  std::array<double, 36> twist_covariance{};
 };
 
 /// One transform of tf2_msgs/TFMessage, its planar part.
@@ -251,6 +257,11 @@ ScanMessage scan_message(const LaserScan& scan, const std::string& frame_id);
 OdometryMessage odometry_message(double stamp_s, const std::string& frame_id,
                                  const std::string& child_frame_id, const Pose2& pose,
                                  double v_mps = 0.0, double w_radps = 0.0);
+/// The odometry message of a fused estimate, as the odometry nodes publish it: its pose, forward,
+/// lateral and yaw rates, and the variances it knows on the covariances' diagonals (x, y, yaw;
+/// forward speed, yaw rate), 0 where it knows none.
+OdometryMessage odometry_message(const OdometryEstimate& estimate, const std::string& frame_id,
+                                 const std::string& child_frame_id);
 
 /// The message written on <scan topic>_filtered: @p original with the filtered ranges (removed
 /// beams NaN).

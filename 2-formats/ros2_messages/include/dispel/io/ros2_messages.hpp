@@ -50,8 +50,9 @@ NavSatFixMessage decode_ros2_nav_sat_fix(const std::uint8_t* data, std::size_t s
 Stamp decode_ros2_clock(const std::uint8_t* data, std::size_t size);
 
 /// Encodes a message, little-endian CDR with its encapsulation header. The fields the recording
-/// model does not keep are written as ROS 1's writer writes them: zero (covariances, z, roll,
-/// pitch, efforts), and an Imu without orientation says so in orientation_covariance[0] = -1.
+/// model does not keep are written as ROS 1's writer writes them: zero (the covariances of an Imu,
+/// z, roll, pitch, efforts), and an Imu without orientation says so in
+/// orientation_covariance[0] = -1. An Odometry's covariances are kept whole.
 std::vector<std::uint8_t> encode_ros2(const ScanMessage& message);
 std::vector<std::uint8_t> encode_ros2(const OdometryMessage& message);
 std::vector<std::uint8_t> encode_ros2(const TransformsMessage& message);

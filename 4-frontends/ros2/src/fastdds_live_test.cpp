@@ -245,6 +245,18 @@ void expect_equal(const FastScan& got, const io::ScanMessage& want, const char* 
   EXPECT_TRUE(same_bits(got.intensities_(), w.intensities_()));
 }
 
+// The leg_tracker recording's scans (a Hokuyo standing still, people walking past), the first
+// @p at_most of them.
+std::vector<io::ScanMessage> leg_tracker_scans(std::size_t at_most = 100000) {
+  auto reader = jobs::open_recording(
+      test::source_path("data/leg_tracker/demo_stationary_simple_environment.bag"));
+  std::vector<io::ScanMessage> scans;
+  reader->read({"/scan"}, [&](const io::RecordedMessage& m) {
+    if (auto s = m.scan(); s && scans.size() < at_most) scans.push_back(*s);
+  });
+  return scans;
+}
+
 // The node (Cyclone) and a ROS 2 process on Fast DDS that drives it and subscribes to it, once
 // every end of every topic has found its other end.
 class CrossVendorSession {
@@ -450,12 +462,7 @@ std::int64_t removed_beams(const io::ScanMessage& filtered) {
 // still sensor stands, so this case checks the scans' way through both vendors; the moving
 // robot below checks the transforms'.
 void play_real_recording(const RosQos& scan_qos, const char* tag) {
-  auto reader = jobs::open_recording(
-      test::source_path("data/leg_tracker/demo_stationary_simple_environment.bag"));
-  std::vector<io::ScanMessage> scans;
-  reader->read({"/scan"}, [&](const io::RecordedMessage& m) {
-    if (auto s = m.scan()) scans.push_back(*s);
-  });
+  std::vector<io::ScanMessage> scans = leg_tracker_scans();
   ASSERT_GT(scans.size(), 100u);
   pipeline::ScanFilterRunnerOptions options;
   options.config = io::parse_filter_config("{}", "defaults");
@@ -561,12 +568,7 @@ TEST(Ros2FastDdsLive, AMovingRobotFromAFastDdsDriverAsDispelFilterFiltersIt) {
 // again, and the node's time follows it. (Which /clock sample a scan meets is the wire's to
 // decide, so the scans' filtering is not compared here; the moving robot above compares it.)
 TEST(Ros2FastDdsLive, UseSimTimeTakesRosTimeFromAFastDdsClockThroughAReset) {
-  auto reader = jobs::open_recording(
-      test::source_path("data/leg_tracker/demo_stationary_simple_environment.bag"));
-  std::vector<io::ScanMessage> scans;
-  reader->read({"/scan"}, [&](const io::RecordedMessage& m) {
-    if (auto s = m.scan(); s && scans.size() < 40) scans.push_back(*s);
-  });
+  std::vector<io::ScanMessage> scans = leg_tracker_scans(40);
   ASSERT_EQ(scans.size(), 40u);
   for (io::ScanMessage& s : scans) s.header.stamp = io::Stamp{};  // No clock on the driver.
 
@@ -616,12 +618,7 @@ TEST(Ros2FastDdsLive, UseSimTimeTakesRosTimeFromAFastDdsClockThroughAReset) {
 // data is read. What must hold is the bound and the count.) Then the transforms come, and the
 // three waiting scans are filtered and published.
 TEST(Ros2FastDdsLive, AFloodOfScansWithoutPosesIsDroppedAndCountedNotQueued) {
-  auto reader = jobs::open_recording(
-      test::source_path("data/leg_tracker/demo_stationary_simple_environment.bag"));
-  std::vector<io::ScanMessage> scans;
-  reader->read({"/scan"}, [&](const io::RecordedMessage& m) {
-    if (auto s = m.scan()) scans.push_back(*s);
-  });
+  std::vector<io::ScanMessage> scans = leg_tracker_scans();
   ASSERT_GT(scans.size(), 1000u);
   const double t0 = scans.front().header.stamp.seconds();
   for (std::size_t k = 0; k < scans.size(); ++k) {

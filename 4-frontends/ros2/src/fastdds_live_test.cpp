@@ -25,6 +25,7 @@
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -134,6 +135,7 @@ class FastDdsProcess {
     set_ros_qos(q, profile);
     return publisher_->create_datawriter(topic<PubSubType>(ros_topic), q);
   }
+  void remove(fdds::DataWriter* w) { publisher_->delete_datawriter(w); }
   template <class PubSubType>
   fdds::DataReader* reader(const std::string& ros_topic, const RosQos& profile) {
     fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
@@ -347,6 +349,27 @@ class CrossVendorSession {
     labels = l[0];
   }
 
+  /// The driver's scan publisher goes away (a driver that stopped): the node says so.
+  void scan_publisher_vanishes() {
+    driver_.remove(scans_);
+    scans_ = nullptr;
+    ASSERT_TRUE(eventually([&] {
+      return node_.log().find(scan_topic_ + ": 0 publishers matched") != std::string::npos;
+    })) << node_.log();
+  }
+  /// A new one comes (the driver started again): the node matches it.
+  void scan_publisher_returns(const RosQos& qos) {
+    scans_ = driver_.writer<sensor_msgs::msg::dds_::LaserScan_PubSubType>(scan_topic_, qos);
+    ASSERT_NE(scans_, nullptr);
+    const std::string matched_line = scan_topic_ + ": 1 publishers matched";
+    ASSERT_TRUE(eventually([&] {
+      const std::string log = node_.log();
+      const std::size_t first = log.find(matched_line);
+      return matched(scans_) == 1 && first != std::string::npos &&
+             log.find(matched_line, first + 1) != std::string::npos;
+    })) << node_.log();
+  }
+
   /// A /clock publisher as `ros2 bag play --clock` makes one (best effort, keep last 1), once
   /// the node (use_sim_time) has matched it.
   void start_clock() {
@@ -412,7 +435,8 @@ class CrossVendorSession {
   /// says so in its log, and Fast DDS's side sees the same mismatch. Then SIGTERM: exit 0, with
   /// @p scans in and published.
   void mismatch_and_stop(std::size_t scans) { mismatch_and_stop(scans, scans); }
-  void mismatch_and_stop(std::size_t scans, std::size_t published) {
+  /// The same with @p published of them published, stopped by @p signal.
+  void mismatch_and_stop(std::size_t scans, std::size_t published, int signal = SIGTERM) {
     fdds::DataReader* latched = driver_.reader<sensor_msgs::msg::dds_::LaserScan_PubSubType>(
         scan_topic_ + "_filtered", kLatchedReader);
     ASSERT_NE(latched, nullptr);
@@ -425,7 +449,7 @@ class CrossVendorSession {
       latched->get_requested_incompatible_qos_status(s);
       return s.total_count >= 1 && s.last_policy_id == fdds::DURABILITY_QOS_POLICY_ID;
     }));
-    EXPECT_EQ(node_.stop(), 0) << node_.log();
+    EXPECT_EQ(node_.stop(signal), 0) << node_.log();
     const std::string counts =
         std::to_string(scans) + " scans in, " + std::to_string(published) + " published";
     EXPECT_NE(node_.log().find(counts), std::string::npos) << node_.log();
@@ -690,6 +714,37 @@ TEST(Ros2FastDdsLive, AFloodOfScansWithoutPosesIsDroppedAndCountedNotQueued) {
   EXPECT_EQ(CrossVendorSession::value(last, "scans dropped (queue full)"),
             std::to_string(received - kQueue));
   session.mismatch_and_stop(static_cast<std::size_t>(received), kQueue);
+}
+
+// No publisher, then one that vanishes and comes back: the node waits without one (its
+// /diagnostics say "no scans"), filters what the driver sends, says when the driver is gone and
+// when it is back, and goes on; Ctrl-C (SIGINT) stops it with its counts.
+TEST(Ros2FastDdsLive, NoPublisherThenOneThatVanishesAndComesBackThenCtrlC) {
+  const std::vector<io::ScanMessage> scans = leg_tracker_scans(20);
+  ASSERT_EQ(scans.size(), 20u);
+  CrossVendorSession session("fv", "/**:\n  ros__parameters:\n    static_sensor: true\n");
+  ASSERT_NO_FATAL_FAILURE(session.start(kSensorData));
+  CrossVendorSession::Status last;
+  std::int32_t stamp_s = 0;
+  ASSERT_TRUE(session.status_until(
+      [](const CrossVendorSession::Status& s, std::int32_t) {
+        return s.message_() == "no scans" && s.level_() == 0;
+      },
+      {}, last, stamp_s))
+      << last.message_();
+  std::size_t sent = 0;
+  for (int run = 0; run < 2; ++run) {
+    if (run == 1) {
+      ASSERT_NO_FATAL_FAILURE(session.scan_publisher_vanishes());
+      ASSERT_NO_FATAL_FAILURE(session.scan_publisher_returns(kDefaults));
+    }
+    for (int k = 0; k < 10; ++k, ++sent) {
+      FastScan f, l;
+      ASSERT_NO_FATAL_FAILURE(session.send(scans[sent], sent, f, l));
+      EXPECT_EQ(f.header_().stamp_().sec_(), scans[sent].header.stamp.sec);
+    }
+  }
+  session.mismatch_and_stop(sent, sent, SIGINT);
 }
 
 }  // namespace

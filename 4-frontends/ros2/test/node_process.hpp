@@ -53,9 +53,10 @@ class NodeProcess {
   NodeProcess(const NodeProcess&) = delete;
   NodeProcess& operator=(const NodeProcess&) = delete;
 
-  /// SIGTERM, then its exit status (-1: it did not stop within kWaitS).
-  int stop() {
-    ::kill(pid_, SIGTERM);
+  /// @p signal (SIGTERM, or SIGINT as Ctrl-C sends it), then its exit status (-1: it did not stop
+  /// within kWaitS).
+  int stop(int signal = SIGTERM) {
+    ::kill(pid_, signal);
     int status = 0;
     const bool exited = eventually([&] { return ::waitpid(pid_, &status, WNOHANG) == pid_; });
     if (!exited) return -1;

@@ -63,6 +63,14 @@
 #include "ros2_tfPubSubTypes.h"
 #include "test_files.hpp"
 
+// Debian's Fast DDS 2.9 deletes its statistics readers through a base class of another size
+// (AddressSanitizer: new-delete-type-mismatch in RTPSReader::~RTPSReader, allocated by
+// StatisticsReaderImpl, when a participant is deleted), which would abort this test under ASan.
+// That one check is off in this binary only, by ASan's default options (ASAN_OPTIONS still adds
+// to them); the node, which has no Fast DDS in it, keeps every check.
+extern "C" const char* __asan_default_options();
+extern "C" const char* __asan_default_options() { return "new_delete_type_mismatch=0"; }
+
 namespace dispel::ros2 {
 namespace {
 
@@ -225,7 +233,8 @@ FastTf transform(const io::Stamp& stamp, const std::string& parent, const std::s
 }
 
 bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
 }
 
 // What Fast DDS read must be @p want, every field, the floats bit for bit (NaN included).

@@ -2,6 +2,7 @@
 // For the ROS 2 live tests: a dispel-ros2 node as a child process, its stderr in a file.
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -38,7 +39,11 @@ class NodeProcess {
     envp.push_back(nullptr);
     pid_ = ::fork();
     if (pid_ == 0) {
+      // A test that dies (an abort, a sanitizer) takes its node with it, and the node holds
+      // none of the test's output pipes: nothing is left to keep ctest waiting.
+      ::prctl(PR_SET_PDEATHSIG, SIGKILL);
       const int fd = ::open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      ::dup2(fd, 1);
       ::dup2(fd, 2);
       ::execve(argv[0], argv.data(), envp.data());
       ::_exit(127);

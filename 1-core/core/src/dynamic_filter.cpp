@@ -67,6 +67,18 @@ constexpr float kRecurringShare = 0.25F;
 constexpr double kRecurringMove_m = 0.05;
 constexpr double kRecurringTurn_rad = 0.035;
 constexpr double kRecurringObjectShare = 0.5;
+// A beam that has returned a part of the robot (an object judged part of it, as above) at one
+// range in at least kRecurringShare of the scans counted is blocked by the robot's body or grazes
+// its edge; what it returns more than kBodyMargin_m beyond that range is no evidence of motion:
+// the world seen past the robot's edge in some scans only, or a return the scanner repeats there
+// (on negative_2's left laser, beams that return the robot at 0.73 m in most scans and a constant
+// 3.75 m or 6.77 m in others while the robot drives 2 m). Someone walking beside or ahead of the
+// robot is never judged part of it (a walker's legs never stand still in the sensor frame), so
+// the beams that hit them are not the body's.
+constexpr float kBodyMargin_m = 0.1F;
+constexpr float kBodyRange_m = 1.0F;
+constexpr float kBodyWeight = 1.0F / 64.0F;
+constexpr float kBodyShare = 0.5F;
 
 // Fragments are absorbed by dynamic tracks seen in this scan or missed for a few scans at most.
 constexpr std::int32_t kFragmentMaxMissed = 2;
@@ -149,6 +161,13 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   if (checked.learn) {
     update_velocities(scan.stamp_s);
     classify(scan, pose, out.segmentation);
+    // The body is learned only when the sensor's motion was measured (by odometry, or by a
+    // registration that holds in every direction): a guessed motion while the robot stands would
+    // count someone standing in front of it as moving with it.
+    if (registering &&
+        (sensor_pose || (out.registration.registered && !out.registration.degenerate))) {
+      learn_body(scan, out.segmentation);
+    }
     previous_stamp_s_ = scan.stamp_s;
     have_previous_ = true;
   } else {
@@ -344,13 +363,25 @@ void DynamicFilter::recur(const LaserScan& scan, const Segmentation& segmentatio
     ++recurring_scans_;
     recurring_pose_ = sensor_pose;
   }
+  recurring_counted_ = learn;
+  if (body_.size() != scan.size()) body_.assign(scan.size(), RecurringRange{});
   const float keep = 1.0F - kRecurringWeight;
   // A slot's share as of the last scan counted before this one (each counted scan that did not
   // return its range decays it).
   const std::uint32_t previous = learn ? recurring_scans_ - 1 : recurring_scans_;
   explained_count_.assign(segmentation.objects.size(), 0);
   for (std::size_t b = 0; b < scan.size(); ++b) {
-    if (!scan.is_valid(b) || scan.ranges_m[b] > kRecurringRange_m) continue;
+    if (!scan.is_valid(b)) continue;
+    const std::int32_t object = segmentation.beam_labels[b];
+    const RecurringRange& body = body_[b];
+    if (object >= 0 && body.share >= kBodyShare &&
+        scan.ranges_m[b] > body.range_m + kBodyMargin_m &&
+        body.share * std::pow(1.0F - kBodyWeight, static_cast<float>(previous - body.scan)) >=
+            kBodyShare) {
+      ++explained_count_[static_cast<std::size_t>(object)];
+      continue;
+    }
+    if (scan.ranges_m[b] > kRecurringRange_m) continue;
     const float r = scan.ranges_m[b];
     const float tolerance = kRecurringTolerance_m + kRecurringRelativeTolerance * r;
     RecurringRange* slots = &recurring_[kRecurringSlots * b];
@@ -386,6 +417,33 @@ void DynamicFilter::recur(const LaserScan& scan, const Segmentation& segmentatio
   for (std::size_t i = 0; i < segmentation.objects.size(); ++i) {
     observations_[i].recurring_share =
         static_cast<double>(explained_count_[i]) / std::max(1, segmentation.objects[i].point_count);
+  }
+}
+
+// Where each beam returns the robot's own body: the beams of objects judged part of the robot in
+// this scan, when it is counted (see recur()).
+void DynamicFilter::learn_body(const LaserScan& scan, const Segmentation& segmentation) {
+  if (!recurring_counted_) return;
+  const float keep = 1.0F - kBodyWeight;
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    const std::int32_t o = segmentation.beam_labels[b];
+    if (o < 0 || !scan.is_valid(b) || scan.ranges_m[b] > kBodyRange_m ||
+        attached_[static_cast<std::size_t>(o)] == 0) {
+      continue;
+    }
+    RecurringRange& body = body_[b];
+    const float r = scan.ranges_m[b];
+    body.share *= std::pow(keep, static_cast<float>(recurring_scans_ - 1 - body.scan));
+    if (std::abs(body.range_m - r) > kRecurringTolerance_m + kRecurringRelativeTolerance * r) {
+      if (body.share >= kBodyShare) {
+        body.scan = recurring_scans_ - 1;  // Brought up to date; another range does not count.
+        continue;
+      }
+      body.range_m = r;
+      body.share = 0.0F;
+    }
+    body.share = body.share * keep + kBodyWeight;
+    body.scan = recurring_scans_;
   }
 }
 
@@ -467,11 +525,13 @@ void DynamicFilter::classify(const LaserScan& scan, const Pose2& sensor_pose,
   }
   spread_to_companions();
   verdicts_.resize(observations_.size());
+  attached_.resize(observations_.size());
   for (std::size_t i = 0; i < observations_.size(); ++i) {
     const Track& t = tracks_[track_of_object_[i]];
     verdicts_[i] = {t.cls.object_class, t.speed_mps};
+    attached_[i] = t.attached ? 1 : 0;
   }
-  forget_lost_tracks();
+  forget_lost_tracks();  // Tracks move: track_of_object_ is stale from here on.
 }
 
 void DynamicFilter::update_class(Track& track, const Observation& obs, double stamp_s) {
@@ -523,6 +583,7 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
       config_.registration.enabled && ((stamp_s - track.local_still_since_s >= kAttachedTime_s &&
                                         obs.local_centroid.norm() <= kAttachedRange_m) ||
                                        obs.recurring_share >= kRecurringObjectShare);
+  track.attached = attached;
   if (attached) evidence = MotionEvidence::kSlow;
   track.cls = update_class_state(track.cls, evidence, cc);
   if (attached && track.cls.object_class != ObjectClass::kStatic) {

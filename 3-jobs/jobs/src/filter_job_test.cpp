@@ -251,7 +251,9 @@ TEST(FilterJobLaserOnly, RealRobotWithoutOdometryOrPeopleKeepsItsWalls) {
       }
     }
     EXPECT_GT(valid, 200000) << laser;
-    EXPECT_LE(static_cast<double>(removed), 0.006 * static_cast<double>(valid))
+    // No people: every removed beam is a false removal. The target: at most 0.2 % per laser
+    // (left 0.18 %, right 0.15 %, rear 0.10 % today; docs/results.md).
+    EXPECT_LE(static_cast<double>(removed), 0.002 * static_cast<double>(valid))
         << laser << ": " << removed << " of " << valid << " valid beams removed";
     std::remove(o.output.c_str());
   }

@@ -178,7 +178,8 @@ class DynamicFilter {
     std::int32_t point_count;
     double explained_share;          // Of its beams, the share the registered map explains.
     Eigen::Vector2d local_centroid;  // In the sensor frame.
-    double recurring_share;          // Of its beams, the share ending where they often end.
+    double recurring_share;          // Of its beams, the share that moves with the robot: ending
+                                     // where they often end, or beyond the robot's own body.
   };
   struct Track {
     std::uint64_t id;
@@ -204,6 +205,7 @@ class DynamicFilter {
     bool free_space_refuted = false;
     Eigen::Vector2d marked_at = Eigen::Vector2d::Zero();
     double marked_s = 0.0;
+    bool attached = false;  // Judged part of the robot in the last scan it was seen.
   };
 
   // What the first step decides about a scan.
@@ -225,6 +227,7 @@ class DynamicFilter {
   void update_velocities(double stamp_s);
   void classify(const LaserScan& scan, const Pose2& sensor_pose, const Segmentation& segmentation);
   void label(const LaserScan& scan, const ScanCheck& check, FilterResult& out);
+  void learn_body(const LaserScan& scan, const Segmentation& segmentation);
 
   // Step 1.
   void pass_through(const LaserScan& scan, FilterEvent event, FilterResult& out);
@@ -272,11 +275,15 @@ class DynamicFilter {
   static constexpr std::size_t kRecurringSlots = 2;
   std::vector<RecurringRange> recurring_;  // kRecurringSlots per beam.
   std::uint32_t recurring_scans_ = 0;      // Scans counted (see recur()).
-  std::optional<Pose2> recurring_pose_;
-  float recurring_travel_m_ = 0.0F;    // The sensor's path over the scans counted.       // The
-                                       // sensor's pose at the last one counted.
-  std::vector<double> spacing_limit_;  // Scratch: per object, for free-space evidence.
-  std::vector<char> keep_;             // Scratch: beams the map learns.
+  std::optional<Pose2> recurring_pose_;    // The sensor's pose at the last scan counted.
+  bool recurring_counted_ = false;         // Whether this scan is counted.
+  // Per beam, the range at which it returns the robot's own body (an object judged part of the
+  // robot), with the share of the scans counted that returned it there (decayed lazily, as
+  // RecurringRange). What such a beam returns well beyond that range moves with the robot.
+  std::vector<RecurringRange> body_;
+  std::vector<char> attached_;  // Scratch: per object of this scan, judged part of the robot.
+  std::vector<double> spacing_limit_;         // Scratch: per object, for free-space evidence.
+  std::vector<char> keep_;                    // Scratch: beams the map learns.
   std::optional<Pose2> previous_input_pose_;  // The pose given with the previous scan.
   std::uint64_t next_id_ = 1;
   bool have_previous_ = false;

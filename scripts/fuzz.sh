@@ -3,9 +3,9 @@
 #   bash scripts/fuzz.sh [SECONDS] [TARGET...]
 # configures and builds build-fuzz/ with clang (only the fuzz targets and the libraries they
 # link), then runs each TARGET (default: every one of tests/fuzz/targets.txt) for SECONDS
-# (default 30) on a fresh copy of its seed corpus (tests/fuzz/corpus/<target>/ and the shipped
-# files targets.txt names), in build-fuzz/corpus/<target>/. Prints one line per target (runs,
-# result); a crash, leak, timeout (10 s) or out-of-memory (4 GiB) leaves its input in
+# (default 30), FUZZ_JOBS targets at a time (default: one per core), on a fresh copy of its seed
+# corpus (tests/fuzz/corpus/<target>/ and the shipped files targets.txt names), in
+# build-fuzz/corpus/<target>/. Prints one line per target (runs, result); a crash, leak, timeout (10 s) or out-of-memory (4 GiB) leaves its input in
 # build-fuzz/artifacts/<target>/, is printed with its path, and makes the script exit 1.
 # tests/fuzz/<target>.dict, when there is one, is the target's libFuzzer dictionary;
 # tests/fuzz/<target>.options, when there is one, adds libFuzzer options (a line of words, # for
@@ -44,9 +44,14 @@ build_targets=()
 for t in "${targets[@]}"; do build_targets+=(--target "fuzz_$t"); done
 cmake --build "$build" -j"$(nproc)" "${build_targets[@]}"
 
-failed=0
-summary=()
-for t in "${targets[@]}"; do
+# One target's run; its summary line goes to build-fuzz/result_<target> ("<target>: ok, ..." or
+# "<target>: FAILED ...").
+fuzz_one() {
+  local t=$1
+  local corpus artifacts log dict options ignored_kinds ignore_crashes limits rc runs replay
+  local ignored not_ignored found kind n c k o
+  local result=$build/result_$t
+  rm -f "$result"
   corpus=$build/corpus/$t
   artifacts=$build/artifacts/$t
   log=$build/fuzz_$t.log
@@ -86,7 +91,7 @@ for t in "${targets[@]}"; do
     -max_len="${max_len[$t]}" -artifact_prefix="$artifacts/" -print_final_stats=1 \
     "${dict[@]}" "${options[@]}" "$corpus" >"$log" 2>&1 || rc=$?
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
-  [ -n "$runs" ] || runs=$(grep -o '#[0-9]*' "$log" | tail -1 | tr -d '#')
+  [ -n "$runs" ] || runs=$(grep -o '#[0-9]*' "$log" | tail -1 | tr -d '#' || true)
   # With -ignore_crashes=1 the run goes on after a crash, but only one kind of crash is ignored:
   # an allocation ASan's allocator cannot make (it aborts where the process would get
   # std::bad_alloc). Each crash input is replayed; one of that kind is renamed oom-asan-*, any
@@ -113,13 +118,30 @@ for t in "${targets[@]}"; do
   # run failed when it left an input that is not ignored, or failed and left none.
   [ -n "$ignored" ] && [ -z "$found" ] && rc=0
   if [ $rc -ne 0 ] || [ -n "$found" ]; then
-    failed=1
     kind=$(grep -m1 -oE 'ERROR: (AddressSanitizer|LeakSanitizer|libFuzzer|UndefinedBehaviorSanitizer)[^(]*|runtime error: .*|fuzz: the error .{0,80}' "$log" || true)
-    summary+=("$t: FAILED after ${runs:-?} runs (exit $rc): ${kind:-see $log}; input: ${found:-none}")
+    echo "$t: FAILED after ${runs:-?} runs (exit $rc): ${kind:-see $log}; input: ${found:-none}" >"$result"
     tail -n 40 "$log" >&2
   else
-    summary+=("$t: ok, ${runs:-?} runs in $seconds s, corpus $(find "$corpus" -type f | wc -l) inputs$ignored")
+    echo "$t: ok, ${runs:-?} runs in $seconds s, corpus $(find "$corpus" -type f | wc -l) inputs$ignored" >"$result"
+  fi
+}
+
+# The targets run FUZZ_JOBS at a time (default: one per core; each is one process, mrpt_rawlog's
+# fork mode one child), each for the whole SECONDS.
+max_jobs=${FUZZ_JOBS:-$(nproc)}
+for t in "${targets[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$max_jobs" ]; do wait -n || true; done
+  fuzz_one "$t" &
+done
+wait
+failed=0
+for t in "${targets[@]}"; do
+  if [ -f "$build/result_$t" ]; then
+    echo "fuzz: $(cat "$build/result_$t")"
+    grep -q "^$t: ok" "$build/result_$t" || failed=1
+  else
+    echo "fuzz: $t: FAILED: the run ended without a result (see $build/fuzz_$t.log)"
+    failed=1
   fi
 done
-printf 'fuzz: %s\n' "${summary[@]}"
 exit $failed

@@ -5,8 +5,9 @@
 # link), then runs each TARGET (default: every one of tests/fuzz/targets.txt) for SECONDS
 # (default 30), FUZZ_JOBS targets at a time (default: one per core), on a fresh copy of its seed
 # corpus (tests/fuzz/corpus/<target>/ and the shipped files targets.txt names), in
-# build-fuzz/corpus/<target>/. Prints one line per target (runs, result); a crash, leak, timeout (10 s) or out-of-memory (4 GiB) leaves its input in
-# build-fuzz/artifacts/<target>/, is printed with its path, and makes the script exit 1.
+# build-fuzz/corpus/<target>/. Prints one line per target (runs, result); a crash, leak,
+# timeout (10 s) or out-of-memory (4 GiB) leaves its input in build-fuzz/artifacts/<target>/, is
+# printed with its path, and makes the script exit 1.
 # tests/fuzz/<target>.dict, when there is one, is the target's libFuzzer dictionary;
 # tests/fuzz/<target>.options, when there is one, adds libFuzzer options (a line of words, # for
 # comments): mrpt_rawlog runs in fork mode, its out-of-memory and timeout inputs and the crashes

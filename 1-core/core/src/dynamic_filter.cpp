@@ -68,17 +68,24 @@ constexpr double kRecurringMove_m = 0.05;
 constexpr double kRecurringTurn_rad = 0.035;
 constexpr double kRecurringObjectShare = 0.5;
 // A beam that has returned a part of the robot (an object judged part of it, as above) at one
-// range in at least kRecurringShare of the scans counted is blocked by the robot's body or grazes
-// its edge; what it returns more than kBodyMargin_m beyond that range is no evidence of motion:
-// the world seen past the robot's edge in some scans only, or a return the scanner repeats there
-// (on negative_2's left laser, beams that return the robot at 0.73 m in most scans and a constant
-// 3.75 m or 6.77 m in others while the robot drives 2 m). Someone walking beside or ahead of the
-// robot is never judged part of it (a walker's legs never stand still in the sensor frame), so
-// the beams that hit them are not the body's.
+// range within kBodyRange_m in at least kBodyShare of the scans counted (an exponential average,
+// kBodyWeight per scan, over scans whose motion was measured) is blocked by the robot's body or
+// grazes its edge; what it returns more than kBodyMargin_m beyond that range is no evidence of
+// motion: the world seen past the robot's edge in some scans only, or a return the scanner repeats
+// there (on negative_2's left laser, beams that return the robot at 0.73 m in most scans and a
+// constant 3.75 m or 6.77 m in others while the robot drives 2 m). Someone walking beside or ahead
+// of the robot is never judged part of it (a walker's legs never stand still in the sensor frame),
+// so the beams that hit them are not the body's.
 constexpr float kBodyMargin_m = 0.1F;
 constexpr float kBodyRange_m = 1.0F;
 constexpr float kBodyWeight = 1.0F / 64.0F;
 constexpr float kBodyShare = 0.5F;
+
+// A range's share as of counted scan @p now: the share it had at its own scan, decayed by @p keep
+// for each counted scan since (pow(keep, 0) is exactly 1).
+float share_at(float share, std::uint32_t since, std::uint32_t now, float keep) {
+  return since < now ? share * std::pow(keep, static_cast<float>(now - since)) : share;
+}
 
 // Fragments are absorbed by dynamic tracks seen in this scan or missed for a few scans at most.
 constexpr std::int32_t kFragmentMaxMissed = 2;
@@ -374,10 +381,11 @@ void DynamicFilter::recur(const LaserScan& scan, const Segmentation& segmentatio
     if (!scan.is_valid(b)) continue;
     const std::int32_t object = segmentation.beam_labels[b];
     const RecurringRange& body = body_[b];
+    // (body.share >= kBodyShare first: most beams have never returned the body, and a share only
+    // decays.)
     if (object >= 0 && body.share >= kBodyShare &&
         scan.ranges_m[b] > body.range_m + kBodyMargin_m &&
-        body.share * std::pow(1.0F - kBodyWeight, static_cast<float>(previous - body.scan)) >=
-            kBodyShare) {
+        share_at(body.share, body.scan, previous, 1.0F - kBodyWeight) >= kBodyShare) {
       ++explained_count_[static_cast<std::size_t>(object)];
       continue;
     }
@@ -390,7 +398,7 @@ void DynamicFilter::recur(const LaserScan& scan, const Segmentation& segmentatio
     for (std::size_t k = 0; k < kRecurringSlots; ++k) {
       RecurringRange& slot = slots[k];
       if (slot.scan < previous) {
-        slot.share *= std::pow(keep, static_cast<float>(previous - slot.scan));
+        slot.share = share_at(slot.share, slot.scan, previous, keep);
         slot.scan = previous;
       }
       if (std::abs(slot.range_m - r) <= tolerance &&
@@ -433,7 +441,7 @@ void DynamicFilter::learn_body(const LaserScan& scan, const Segmentation& segmen
     }
     RecurringRange& body = body_[b];
     const float r = scan.ranges_m[b];
-    body.share *= std::pow(keep, static_cast<float>(recurring_scans_ - 1 - body.scan));
+    body.share = share_at(body.share, body.scan, recurring_scans_ - 1, keep);
     if (std::abs(body.range_m - r) > kRecurringTolerance_m + kRecurringRelativeTolerance * r) {
       if (body.share >= kBodyShare) {
         body.scan = recurring_scans_ - 1;  // Brought up to date; another range does not count.

@@ -434,10 +434,10 @@ TEST(DynamicFilter, WhatABeamReturnsPastTheRobotsOwnBodyIsNeverRemoved) {
 }
 
 TEST(DynamicFilter, SomeoneWalkingBesideTheDrivingRobotIsStillRemoved) {
-  // The rule above learns which beams the robot's body blocks from ranges that recur within 1 m;
-  // someone who walks 0.6 m beside the robot at its speed makes their beams recur too. What
-  // those beams return at their own range is judged as any object: the walker (a swinging gait,
-  // never still in the sensor frame) is removed.
+  // The rule above learns which beams the robot's body blocks from the objects judged part of the
+  // robot within 1 m. Someone who walks 0.6 m beside the robot at its speed keeps to the same
+  // place in the sensor frame too, but a swinging gait is never still there: never part of the
+  // robot, so never the body, and the walker is removed.
   Scenario s;
   s.walls = room(10.0, 8.0);
   s.pillars = {{{4.0, 3.0}, 0.3}, {{-3.0, -4.0}, 0.4}};

@@ -17,6 +17,26 @@ constexpr double kStep = 0.01;                   // Physics step, seconds.
 constexpr double kRobotClearance_m = 0.6;        // People keep this far from the robot's centre.
 constexpr double kMaxAcceleration = 0.5;         // m/s^2, the robot's.
 constexpr double kMaxAngularAcceleration = 1.5;  // rad/s^2.
+constexpr double kMaxTurnRate = 0.6;             // rad/s, the robot's.
+// The robot rounds a corner (a waypoint where its path turns by more than kCornerTurn_rad) at no
+// more than kMaxTurnRate * kCornerRadius_m, 0.3 m/s, braking for it in time: at 1.5 m/s and its
+// full turn rate it would swing 2.5 m wide, through the wall of a 2.2 m corridor.
+constexpr double kCornerRadius_m = 0.5;
+constexpr double kCornerTurn_rad = 20.0 * kPi / 180.0;
+constexpr double kLookahead_m = 1.0;  // The robot steers for a point this far ahead on its leg.
+
+// True when the segments p0-p1 and a-b cross (touching counts).
+bool segments_cross(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1, const Eigen::Vector2d& a,
+                    const Eigen::Vector2d& b) {
+  const auto side = [](const Eigen::Vector2d& o, const Eigen::Vector2d& u,
+                       const Eigen::Vector2d& q) {
+    const double c = (u - o).x() * (q - o).y() - (u - o).y() * (q - o).x();
+    return (c > 0.0) - (c < 0.0);
+  };
+  const int s0 = side(a, b, p0), s1 = side(a, b, p1), s2 = side(p0, p1, a), s3 = side(p0, p1, b);
+  if (s0 == 0 && s1 == 0) return false;  // Along the wall's line: not through it.
+  return s0 != s1 && s2 != s3;
+}
 
 constexpr auto reject = reject_field;
 
@@ -27,6 +47,11 @@ class PathFollower {
       : points_(std::move(points)), loop_(loop) {}
   bool done() const { return points_.empty() || (!loop_ && next_ >= points_.size()); }
   const Eigen::Vector2d& target() const { return points_[next_ % points_.size()]; }
+  // The waypoint after the target, or null at the end of a path that does not loop.
+  const Eigen::Vector2d* after_target() const {
+    if (done() || points_.size() < 2 || (!loop_ && next_ + 1 >= points_.size())) return nullptr;
+    return &points_[(next_ + 1) % points_.size()];
+  }
   // Moves on when @p position is within @p reach of the target. Returns true on arrival.
   bool advance_if_reached(const Eigen::Vector2d& position, double reach) {
     if (done() || (position - target()).norm() > reach) return false;
@@ -478,6 +503,7 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
                                                   : scenario.robot.waypoints;
   PathFollower robot_path(robot_points, scenario.robot.loop);
   Pose2 pose = scenario.robot.start;
+  Eigen::Vector2d leg_from = pose.translation();  // Where the robot's current leg starts.
 
   // Static shapes once. Rough walls and shelves are drawn from a generator of their own, so that
   // a scenario without them gets the same noise as before they existed.
@@ -495,6 +521,13 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
   }
   base.circles.insert(base.circles.end(), scenario.world.circles.begin(),
                       scenario.world.circles.end());
+  // What the robot must never drive through: the walls as drawn (rough walls' pieces have gaps
+  // for glass), rectangles and the lines of the shelf rows.
+  std::vector<Segment> solid = scenario.world.walls;
+  for (const Rectangle& r : scenario.world.rectangles) {
+    for (const Segment& s : rectangle_edges(r)) solid.push_back(s);
+  }
+  for (const ShelfRow& row : scenario.world.shelves) solid.push_back({row.from, row.to});
   const auto static_segments = static_cast<std::int32_t>(base.segments.size());
   const auto static_circles = static_cast<std::int32_t>(base.circles.size());
 
@@ -520,15 +553,15 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
   // The sweep: beam i is measured at i * time_increment after the stamp, from where the laser is
   // then (the robot's motion over that time at its current speed and turn rate).
   const double time_increment = lidar.sweep ? lidar.resolution_deg / (360.0 * lidar.rate_hz) : 0.0;
-  const auto beam_pose = [&](const Pose2& base, double vv, double ww, double dt) {
-    if (dt <= 0.0) return base * scenario.robot.laser_mount;
-    return base * arc_motion(vv, ww, dt) * scenario.robot.laser_mount;
+  const auto beam_pose = [&](const Pose2& robot, double vv, double ww, double dt) {
+    if (dt <= 0.0) return robot * scenario.robot.laser_mount;
+    return robot * arc_motion(vv, ww, dt) * scenario.robot.laser_mount;
   };
   // Casts the scan, in blocks of beams that share one laser pose (8 beams: 1.5 mm apart at
   // 1.5 m/s and 0.17 degrees at 20 Hz).
-  const auto cast_scan = [&](const World& world, const Pose2& base, double vv, double ww,
+  const auto cast_scan = [&](const World& world, const Pose2& robot, double vv, double ww,
                              LaserScan& scan, std::vector<std::int32_t>& hit) {
-    scan = raycast(world, base * scenario.robot.laser_mount, geometry, &hit);
+    scan = raycast(world, robot * scenario.robot.laser_mount, geometry, &hit);
     if (time_increment <= 0.0) return;
     constexpr std::int32_t kBlock = 8;
     std::vector<std::int32_t> block_hit;
@@ -537,7 +570,7 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
       g.angle_min_rad = geometry.angle_min_rad + b0 * geometry.angle_increment_rad;
       g.beam_count = std::min(kBlock, geometry.beam_count - b0);
       const double dt = (b0 + 0.5 * (g.beam_count - 1)) * time_increment;
-      const LaserScan part = raycast(world, beam_pose(base, vv, ww, dt), g, &block_hit);
+      const LaserScan part = raycast(world, beam_pose(robot, vv, ww, dt), g, &block_hit);
       for (std::int32_t k = 0; k < g.beam_count; ++k) {
         scan.ranges_m[static_cast<std::size_t>(b0 + k)] =
             part.ranges_m[static_cast<std::size_t>(k)];
@@ -652,21 +685,62 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
     }
     if (sample_now && sink.sensor) sink.sensor(sample);
 
-    // Robot: steer toward the next waypoint, slow down while turning; its motors change speed
-    // and turn rate at most kMaxAcceleration and kMaxAngularAcceleration.
+    // Robot: follow the leg from the last waypoint to the next (pure pursuit of a point
+    // kLookahead_m ahead on it), slow down while turning and before corners, and turn in
+    // kCornerRadius_m before a corner; its motors change speed and turn rate at most
+    // kMaxAcceleration and kMaxAngularAcceleration.
     double v_cmd = 0.0, w_cmd = 0.0;
+    const auto corner_at_target = [&] {
+      const Eigen::Vector2d* after = robot_path.after_target();
+      if (after == nullptr) return false;
+      const Eigen::Vector2d in = robot_path.target() - leg_from;
+      const Eigen::Vector2d out = *after - robot_path.target();
+      return std::abs(wrap_angle(std::atan2(out.y(), out.x()) - std::atan2(in.y(), in.x()))) >
+             kCornerTurn_rad;
+    };
     if (!robot_path.done()) {
-      robot_path.advance_if_reached(pose.translation(), 0.15);
+      const Eigen::Vector2d reached = robot_path.target();
+      if (robot_path.advance_if_reached(pose.translation(),
+                                        corner_at_target() ? kCornerRadius_m : 0.15)) {
+        leg_from = reached;
+      }
       if (!robot_path.done()) {
         const Eigen::Vector2d to = robot_path.target() - pose.translation();
-        const double err = wrap_angle(std::atan2(to.y(), to.x()) - pose.yaw_rad);
-        w_cmd = std::clamp(2.0 * err, -0.6, 0.6);
+        const Eigen::Vector2d leg = robot_path.target() - leg_from;
+        Eigen::Vector2d aim = robot_path.target();
+        const double leg_length = leg.norm();
+        if (leg_length > 1e-9) {
+          const Eigen::Vector2d along = leg / leg_length;
+          const double at = std::max(0.0, along.dot(pose.translation() - leg_from)) + kLookahead_m;
+          if (at < leg_length) aim = leg_from + at * along;
+        }
+        const Eigen::Vector2d to_aim = aim - pose.translation();
+        const double err = wrap_angle(std::atan2(to_aim.y(), to_aim.x()) - pose.yaw_rad);
+        w_cmd = std::clamp(2.0 * err, -kMaxTurnRate, kMaxTurnRate);
         v_cmd = scenario.robot.speed_mps * std::max(0.0, std::cos(err));
+        if (corner_at_target()) {
+          const double v_corner = kMaxTurnRate * kCornerRadius_m;
+          const double braking = std::max(0.0, to.norm() - kCornerRadius_m);
+          v_cmd =
+              std::min(v_cmd, std::sqrt(v_corner * v_corner + 2.0 * kMaxAcceleration * braking));
+        }
       }
     }
     v += std::clamp(v_cmd - v, -kMaxAcceleration * kStep, kMaxAcceleration * kStep);
     w += std::clamp(w_cmd - w, -kMaxAngularAcceleration * kStep, kMaxAngularAcceleration * kStep);
+    const Eigen::Vector2d was = pose.translation();
     pose = pose * Pose2{v * kStep, 0.0, w * kStep};
+    for (const Segment& wall : solid) {
+      if (!segments_cross(was, pose.translation(), wall.a, wall.b)) continue;
+      std::ostringstream m;
+      m.setf(std::ios::fixed);
+      m.precision(2);
+      m << "the robot drove through a wall at " << static_cast<double>(step + 1) * kStep
+        << " s into the run, at (" << pose.x_m << ", " << pose.y_m
+        << "): its path turns too sharply for robot.speed_mps " << scenario.robot.speed_mps
+        << ", or runs through the wall (move its waypoints)";
+      throw std::invalid_argument(m.str());
+    }
 
     // Actors.
     for (ActorState& s : actors) {

@@ -8,6 +8,8 @@
 #include <functional>
 #include <limits>
 #include <set>
+#include <stdexcept>
+#include <string>
 
 namespace dispel::sim {
 namespace {
@@ -240,6 +242,25 @@ TEST(Simulator, RobotFollowsTheLawnmowerAndOdometryDriftsFromTheTruth) {
   const double drift = (end.odom_pose.translation() - end.true_pose.translation()).norm();
   EXPECT_GT(drift, 0.001);  // The wheels have scale error and noise...
   EXPECT_LT(drift, 2.0);    // ...but odometry stays usable.
+}
+
+// A path through a wall (or a corner taken too fast) would record what no robot can see: the
+// run is refused, naming the time and place.
+TEST(Simulator, ARobotThatWouldDriveThroughAWallIsRefused) {
+  Scenario s;
+  s.duration_s = 10.0;
+  s.world.walls = {{{3.0, -2.0}, {3.0, 2.0}}};
+  s.robot.speed_mps = 1.0;
+  s.robot.waypoints = {{6.0, 0.0}};
+  try {
+    simulate(s, 1);
+    ADD_FAILURE() << "drove through the wall";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("drove through a wall"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("at (3.0"), std::string::npos) << e.what();
+  }
+  s.robot.waypoints = {{2.0, 0.0}, {2.0, 3.0}, {6.0, 3.0}};  // Around its end: fine.
+  EXPECT_NO_THROW(simulate(s, 1));
 }
 
 // A real scanner measures its beams over the sweep: with sweep on, beam i is measured

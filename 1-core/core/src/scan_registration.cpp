@@ -26,6 +26,13 @@ Eigen::Vector2d perp(const Eigen::Vector2d& v) { return {-v.y(), v.x()}; }
 constexpr double kThresholdRange_m = 10.0;
 // Sensor motion below which a scan says nothing about the seed's error.
 constexpr double kMinMotionForThreshold_m = 0.02;
+// The odometry's motion and the constant-velocity guess part by more than a robot's motors can
+// change within a scan (1.5 rad/s^2 over a scan of 0.13 s moves the heading by 0.03 rad more than
+// the guess): the guess is tried as a seed too. It replaces the odometry's alignment when it
+// matches this much more of the scan (or the odometry's did not register).
+constexpr double kSeedsApart_rad = 0.05;
+constexpr double kSeedsApart_m = 0.15;
+constexpr double kBetterShare = 0.1;
 // Voxels hit by fewer scans than structure needs are forgotten when unseen this long (the trail
 // of someone walking by).
 constexpr double kTransientMemory_s = 2.0;
@@ -281,6 +288,152 @@ std::int32_t ScanRegistration::gather_candidates(const Pose2& pose, int reach, d
   return covered;
 }
 
+// Aligns the thinned scan with the map from @p seed (@p delta: the seed's motion since the
+// previous scan; report.seeded_by_odometry: whose noise the seed has). Fills the report's
+// alignment fields and returns the registered pose, or @p seed with report.fallback set.
+Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double threshold,
+                              RegistrationReport& report) {
+  Pose2 pose = seed;
+  // Candidates: the points of the voxels around each sample point at the seed, gathered
+  // once (the registration moves a point by less than the threshold).
+  // A young map (the first scans, or a scene that has just changed) has no structure yet:
+  // then every voxel is a candidate.
+  const int reach = static_cast<int>(std::ceil(threshold / config_.voxel_size_m));
+  if (gather_candidates(seed, reach, threshold + config_.max_correction_m, true) <
+      config_.min_points) {
+    gather_candidates(seed, reach, threshold + config_.max_correction_m, false);
+  }
+
+  nearby_.resize(sample_.size());  // Each filled at the first iteration.
+  const double kappa = threshold / 3.0;
+  const double threshold2 = threshold * threshold;
+  Eigen::Matrix3d h_data = Eigen::Matrix3d::Zero();
+  std::int32_t inliers = 0;
+  double sum_e2 = 0.0;
+  for (int iteration = 0; iteration < config_.max_iterations; ++iteration) {
+    Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    inliers = 0;
+    sum_e2 = 0.0;
+    const Eigen::Vector2d c = pose.translation();
+    const PoseTransform to_fixed(pose);
+    for (std::size_t i = 0; i < sample_.size(); ++i) {
+      const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
+      // The nearest candidate (the first of equals), used when within the threshold: from
+      // the second iteration on, among the point's nearby candidates when they hold it;
+      // among all of them otherwise (finding, from the first iteration on, the nearby ones
+      // around where the point is now). A scan that converges at once pays nothing for it.
+      Nearby& nearby = nearby_[i];
+      double best = kInfinity;
+      std::int32_t found = -1;
+      const auto consider = [&](std::int32_t j) {
+        const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
+        if (d2 < best) {
+          best = d2;
+          found = j;
+        }
+        return d2;
+      };
+      const std::int32_t begin = candidate_begin_[i], end = candidate_begin_[i + 1];
+      if (iteration == 0) {
+        for (std::int32_t j = begin; j < end; ++j) consider(j);
+      } else {
+        if (iteration > 1 && nearby.count >= 0 &&
+            nearby.nearest_m + (q - nearby.at).norm() + (q - nearby.origin).norm() +
+                    kDistanceMargin_m <=
+                kNearby_m) {
+          for (std::int32_t k = 0; k < nearby.count; ++k) {
+            consider(nearby.index[static_cast<std::size_t>(k)]);
+          }
+        } else {
+          nearby.origin = q;
+          nearby.count = 0;
+          for (std::int32_t j = begin; j < end; ++j) {
+            const double d2 = consider(j);
+            // Without a branch: written at the count (the last slot takes the overflow),
+            // counted when near.
+            nearby.index[static_cast<std::size_t>(std::min(nearby.count, kNearbyMax))] = j;
+            nearby.count += d2 <= kNearby_m * kNearby_m ? 1 : 0;
+          }
+          if (nearby.count > kNearbyMax) nearby.count = -1;
+        }
+        nearby.at = q;
+        nearby.nearest_m = std::sqrt(best);
+      }
+      if (!(best < threshold2)) continue;
+      ++inliers;
+      const Eigen::Vector2d diff = q - candidate_points_[static_cast<std::size_t>(found)];
+      Eigen::Vector2d normal = candidate_normals_[static_cast<std::size_t>(found)];
+      if (normal.squaredNorm() < 0.25) {  // No normal: point to point along the difference.
+        if (best < 1e-18) continue;
+        normal = diff / std::sqrt(best);
+      }
+      const double e = normal.dot(diff);
+      const Eigen::Vector3d j(normal.x(), normal.y(), normal.dot(perp(q - c)));
+      const double w = kappa * kappa / ((kappa + e * e) * (kappa + e * e));
+      h.noalias() += w * j * j.transpose();
+      g.noalias() += w * e * j;
+      sum_e2 += e * e;
+    }
+    h_data = h;
+    if (inliers < config_.min_points) break;
+    // The residuals count with the range noise (range_noise_m); the seed is a measurement
+    // too: the odometry's motion within its own noise (odometry_noise_m / _rad per scan),
+    // a constant-velocity guess within far wider bounds. It decides the directions the scan
+    // does not constrain (a corridor's length) and holds against a few points that fit.
+    h /= config_.range_noise_m * config_.range_noise_m;
+    g /= config_.range_noise_m * config_.range_noise_m;
+    // The odometry's noise grows with the motion (5 % of it, and 0.01 rad per metre).
+    const double moved = delta.translation().norm(), turned = std::abs(delta.yaw_rad);
+    const double sigma_t = report.seeded_by_odometry ? config_.odometry_noise_m + 0.05 * moved
+                                                     : config_.constant_velocity_noise_m;
+    const double sigma_r = report.seeded_by_odometry
+                               ? config_.odometry_noise_rad + 0.05 * turned + 0.01 * moved
+                               : config_.constant_velocity_noise_rad;
+    const double prior_t = 1.0 / (sigma_t * sigma_t);
+    const double prior_r = 1.0 / (sigma_r * sigma_r);
+    const Eigen::Vector3d off(pose.x_m - seed.x_m, pose.y_m - seed.y_m,
+                              wrap_angle(pose.yaw_rad - seed.yaw_rad));
+    h(0, 0) += prior_t;
+    h(1, 1) += prior_t;
+    h(2, 2) += prior_r;
+    g += Eigen::Vector3d(prior_t * off.x(), prior_t * off.y(), prior_r * off.z());
+    const Eigen::Vector3d step = -h.ldlt().solve(g);
+    if (!step.allFinite()) break;
+    pose.x_m += step.x();
+    pose.y_m += step.y();
+    pose.yaw_rad = wrap_angle(pose.yaw_rad + step.z());
+    report.iterations = iteration + 1;
+    // Converged: a step of 1 mm and 0.1 mrad is far below the returns' noise. (1e-4 and 1e-5
+    // ran to max_iterations on most scans, the Geman-McClure weights and the correspondences
+    // trading places at that scale.)
+    if (step.head<2>().norm() < 1e-3 && std::abs(step.z()) < 1e-4) break;
+  }
+  // With odometry to fall back on, a scan must match more structure to be trusted over it.
+  const bool enough = inliers >= (report.seeded_by_odometry ? config_.min_points_with_odometry
+                                                            : config_.min_points);
+  report.inlier_share =
+      static_cast<double>(inliers) / static_cast<double>(std::max<std::size_t>(1, sample_.size()));
+  report.residual_m = inliers > 0 ? std::sqrt(sum_e2 / inliers) : 0.0;
+  // Degeneracy: the translation information's eigenvalues (closed form, 2x2 symmetric).
+  const double a = h_data(0, 0), b = h_data(0, 1), d = h_data(1, 1);
+  const double mean = 0.5 * (a + d);
+  const double spread = std::sqrt(0.25 * (a - d) * (a - d) + b * b);
+  report.degeneracy = mean + spread > 0.0 ? std::max(0.0, mean - spread) / (mean + spread) : 0.0;
+  report.correction = seed.inverse() * pose;
+  if (!enough || report.inlier_share < config_.min_inlier_share ||
+      report.correction.translation().norm() > config_.max_correction_m ||
+      std::abs(report.correction.yaw_rad) > config_.max_correction_rad ||
+      !std::isfinite(pose.x_m + pose.y_m + pose.yaw_rad)) {
+    report.fallback = true;
+    report.correction = Pose2{};
+    return seed;
+  }
+  report.registered = true;
+  report.degenerate = report.degeneracy < config_.degeneracy_ratio;
+  return pose;
+}
+
 Pose2 ScanRegistration::register_scan(const LaserScan& scan,
                                       const std::optional<Pose2>& odometry_pose,
                                       RegistrationReport& report) {
@@ -319,152 +472,40 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
     if (report.points < config_.min_points) {
       report.fallback = true;
     } else {
-      // Candidates: the points of the voxels around each sample point at the seed, gathered
-      // once (the registration moves a point by less than the threshold).
-      // A young map (the first scans, or a scene that has just changed) has no structure yet:
-      // then every voxel is a candidate.
-      const int reach = static_cast<int>(std::ceil(threshold / config_.voxel_size_m));
-      if (gather_candidates(seed, reach, threshold + config_.max_correction_m, true) <
-          config_.min_points) {
-        gather_candidates(seed, reach, threshold + config_.max_correction_m, false);
-      }
-
-      nearby_.resize(sample_.size());  // Each filled at the first iteration.
-      const double kappa = threshold / 3.0;
-      const double threshold2 = threshold * threshold;
-      Eigen::Matrix3d h_data = Eigen::Matrix3d::Zero();
-      std::int32_t inliers = 0;
-      double sum_e2 = 0.0;
-      for (int iteration = 0; iteration < config_.max_iterations; ++iteration) {
-        Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
-        Eigen::Vector3d g = Eigen::Vector3d::Zero();
-        inliers = 0;
-        sum_e2 = 0.0;
-        const Eigen::Vector2d c = pose.translation();
-        const PoseTransform to_fixed(pose);
-        for (std::size_t i = 0; i < sample_.size(); ++i) {
-          const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
-          // The nearest candidate (the first of equals), used when within the threshold: from
-          // the second iteration on, among the point's nearby candidates when they hold it;
-          // among all of them otherwise (finding, from the first iteration on, the nearby ones
-          // around where the point is now). A scan that converges at once pays nothing for it.
-          Nearby& nearby = nearby_[i];
-          double best = kInfinity;
-          std::int32_t found = -1;
-          const auto consider = [&](std::int32_t j) {
-            const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
-            if (d2 < best) {
-              best = d2;
-              found = j;
-            }
-            return d2;
-          };
-          const std::int32_t begin = candidate_begin_[i], end = candidate_begin_[i + 1];
-          if (iteration == 0) {
-            for (std::int32_t j = begin; j < end; ++j) consider(j);
-          } else {
-            if (iteration > 1 && nearby.count >= 0 &&
-                nearby.nearest_m + (q - nearby.at).norm() + (q - nearby.origin).norm() +
-                        kDistanceMargin_m <=
-                    kNearby_m) {
-              for (std::int32_t k = 0; k < nearby.count; ++k) {
-                consider(nearby.index[static_cast<std::size_t>(k)]);
-              }
-            } else {
-              nearby.origin = q;
-              nearby.count = 0;
-              for (std::int32_t j = begin; j < end; ++j) {
-                const double d2 = consider(j);
-                // Without a branch: written at the count (the last slot takes the overflow),
-                // counted when near.
-                nearby.index[static_cast<std::size_t>(std::min(nearby.count, kNearbyMax))] = j;
-                nearby.count += d2 <= kNearby_m * kNearby_m ? 1 : 0;
-              }
-              if (nearby.count > kNearbyMax) nearby.count = -1;
-            }
-            nearby.at = q;
-            nearby.nearest_m = std::sqrt(best);
+      pose = align(seed, delta, threshold, report);
+      // A wheel that slips turns the odometry by degrees within a scan, farther than the
+      // registration's reach from the seed: the scan then registers poorly or not at all, and
+      // the map goes on from a pose rotated by the slip. When the odometry's motion and the
+      // constant-velocity guess (the registered motion of the scans before) part by more than a
+      // robot's motors can change within a scan, the guess is tried too, and the alignment that
+      // matched more of the scan is kept.
+      if (report.seeded_by_odometry && velocity_per_s_initialised_ && dt > 0.0) {
+        const Pose2 guess_delta = scaled(velocity_per_s_, dt);
+        const Pose2 apart = delta.inverse() * guess_delta;
+        if (std::abs(apart.yaw_rad) > kSeedsApart_rad ||
+            apart.translation().norm() > kSeedsApart_m) {
+          RegistrationReport guessed = report;
+          guessed.seeded_by_odometry = false;
+          guessed.registered = guessed.fallback = guessed.degenerate = false;
+          const Pose2 from_guess =
+              align(previous_pose_ * guess_delta, guess_delta, threshold, guessed);
+          if (guessed.registered &&
+              guessed.inlier_share * guessed.points >= config_.min_points_with_odometry &&
+              (!report.registered || guessed.inlier_share > report.inlier_share + kBetterShare)) {
+            guessed.odometry_overruled = true;
+            report = guessed;
+            pose = from_guess;
           }
-          if (!(best < threshold2)) continue;
-          ++inliers;
-          const Eigen::Vector2d diff = q - candidate_points_[static_cast<std::size_t>(found)];
-          Eigen::Vector2d normal = candidate_normals_[static_cast<std::size_t>(found)];
-          if (normal.squaredNorm() < 0.25) {  // No normal: point to point along the difference.
-            if (best < 1e-18) continue;
-            normal = diff / std::sqrt(best);
-          }
-          const double e = normal.dot(diff);
-          const Eigen::Vector3d j(normal.x(), normal.y(), normal.dot(perp(q - c)));
-          const double w = kappa * kappa / ((kappa + e * e) * (kappa + e * e));
-          h.noalias() += w * j * j.transpose();
-          g.noalias() += w * e * j;
-          sum_e2 += e * e;
         }
-        h_data = h;
-        if (inliers < config_.min_points) break;
-        // The residuals count with the range noise (range_noise_m); the seed is a measurement
-        // too: the odometry's motion within its own noise (odometry_noise_m / _rad per scan),
-        // a constant-velocity guess within far wider bounds. It decides the directions the scan
-        // does not constrain (a corridor's length) and holds against a few points that fit.
-        h /= config_.range_noise_m * config_.range_noise_m;
-        g /= config_.range_noise_m * config_.range_noise_m;
-        // The odometry's noise grows with the motion (5 % of it, and 0.01 rad per metre).
-        const double moved = delta.translation().norm(), turned = std::abs(delta.yaw_rad);
-        const double sigma_t = report.seeded_by_odometry ? config_.odometry_noise_m + 0.05 * moved
-                                                         : config_.constant_velocity_noise_m;
-        const double sigma_r = report.seeded_by_odometry
-                                   ? config_.odometry_noise_rad + 0.05 * turned + 0.01 * moved
-                                   : config_.constant_velocity_noise_rad;
-        const double prior_t = 1.0 / (sigma_t * sigma_t);
-        const double prior_r = 1.0 / (sigma_r * sigma_r);
-        const Eigen::Vector3d off(pose.x_m - seed.x_m, pose.y_m - seed.y_m,
-                                  wrap_angle(pose.yaw_rad - seed.yaw_rad));
-        h(0, 0) += prior_t;
-        h(1, 1) += prior_t;
-        h(2, 2) += prior_r;
-        g += Eigen::Vector3d(prior_t * off.x(), prior_t * off.y(), prior_r * off.z());
-        const Eigen::Vector3d step = -h.ldlt().solve(g);
-        if (!step.allFinite()) break;
-        pose.x_m += step.x();
-        pose.y_m += step.y();
-        pose.yaw_rad = wrap_angle(pose.yaw_rad + step.z());
-        report.iterations = iteration + 1;
-        // Converged: a step of 1 mm and 0.1 mrad is far below the returns' noise. (1e-4 and 1e-5
-        // ran to max_iterations on most scans, the Geman-McClure weights and the correspondences
-        // trading places at that scale.)
-        if (step.head<2>().norm() < 1e-3 && std::abs(step.z()) < 1e-4) break;
       }
-      // With odometry to fall back on, a scan must match more structure to be trusted over it.
-      const bool enough = inliers >= (report.seeded_by_odometry ? config_.min_points_with_odometry
-                                                                : config_.min_points);
-      report.inlier_share = static_cast<double>(inliers) /
-                            static_cast<double>(std::max<std::size_t>(1, sample_.size()));
-      report.residual_m = inliers > 0 ? std::sqrt(sum_e2 / inliers) : 0.0;
-      // Degeneracy: the translation information's eigenvalues (closed form, 2x2 symmetric).
-      const double a = h_data(0, 0), b = h_data(0, 1), d = h_data(1, 1);
-      const double mean = 0.5 * (a + d);
-      const double spread = std::sqrt(0.25 * (a - d) * (a - d) + b * b);
-      report.degeneracy =
-          mean + spread > 0.0 ? std::max(0.0, mean - spread) / (mean + spread) : 0.0;
-      report.correction = seed.inverse() * pose;
-      if (!enough || report.inlier_share < config_.min_inlier_share ||
-          report.correction.translation().norm() > config_.max_correction_m ||
-          std::abs(report.correction.yaw_rad) > config_.max_correction_rad ||
-          !std::isfinite(pose.x_m + pose.y_m + pose.yaw_rad)) {
-        report.fallback = true;
-        pose = seed;
-        report.correction = Pose2{};
-      } else {
-        report.registered = true;
-        report.degenerate = report.degeneracy < config_.degeneracy_ratio;
-        if (delta.translation().norm() > kMinMotionForThreshold_m ||
-            std::abs(delta.yaw_rad) > kMinMotionForThreshold_m / kThresholdRange_m) {
-          const double error =
-              report.correction.translation().norm() +
-              2.0 * kThresholdRange_m * std::sin(0.5 * std::abs(report.correction.yaw_rad));
-          model_error_sum_ += error * error;
-          ++model_error_count_;
-        }
+      if (report.registered &&
+          (delta.translation().norm() > kMinMotionForThreshold_m ||
+           std::abs(delta.yaw_rad) > kMinMotionForThreshold_m / kThresholdRange_m)) {
+        const double error =
+            report.correction.translation().norm() +
+            2.0 * kThresholdRange_m * std::sin(0.5 * std::abs(report.correction.yaw_rad));
+        model_error_sum_ += error * error;
+        ++model_error_count_;
       }
     }
   }

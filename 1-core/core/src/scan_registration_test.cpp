@@ -132,6 +132,48 @@ TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
       laser_only.final_m);
 }
 
+// A wheel that slips: the odometry turns 10 degrees in each of four scans (40 degrees in half a
+// second) while the robot drives straight on, then goes on from that heading (the simulator's
+// slips at 1.5 m/s turned it 27 degrees: a warehouse run whose map turned by 17 degrees with the
+// slip lost 4 % of its walls). The odometry's motion parts from the constant-velocity guess; the
+// guess is tried too and matches the scan, and the registered heading holds. Without the guess
+// (measured): 40 degrees and 5.7 m off at the end; with 7 degrees a scan the office's walls
+// still pulled the odometry's seed back.
+TEST(ScanRegistration, AWheelThatSlipsDoesNotTurnTheMap) {
+  const sim::Scenario s = office_loop(16.0);
+  const sim::SimulationOutput out = sim::simulate(s, 1);
+  ScanRegistration reg{RegistrationConfig{}};
+  std::size_t sensor = 0;
+  Pose2 previous_odometry, slipped;
+  int overruled = 0, k = 0;
+  Pose2 first_estimate, first_truth, estimate, truth;
+  for (const sim::ScanFrame& f : out.scans) {
+    while (sensor + 1 < out.sensors.size() && out.sensors[sensor + 1].stamp_s <= f.scan.stamp_s)
+      ++sensor;
+    const Pose2 odometry = out.sensors[sensor].odom_pose;
+    const Pose2 delta = previous_odometry.inverse() * odometry;
+    slipped = slipped * delta * Pose2{0.0, 0.0, k >= 60 && k < 64 ? 10.0 * kDeg : 0.0};
+    previous_odometry = odometry;
+    RegistrationReport report;
+    estimate = reg.register_scan(f.scan, slipped * s.robot.laser_mount, report);
+    truth = f.base_pose * s.robot.laser_mount;
+    if (k == 0) {
+      first_estimate = estimate;
+      first_truth = truth;
+    }
+    reg.add(std::vector<char>(f.scan.size(), 1), {});
+    overruled += report.odometry_overruled ? 1 : 0;
+    ++k;
+  }
+  const Pose2 moved_estimate = first_estimate.inverse() * estimate;
+  const Pose2 moved_truth = first_truth.inverse() * truth;
+  EXPECT_GE(overruled, 1);
+  EXPECT_LT(std::abs(wrap_angle(moved_estimate.yaw_rad - moved_truth.yaw_rad)), 1.0 * kDeg);
+  EXPECT_LT((moved_estimate.translation() - moved_truth.translation()).norm(), 0.3);
+  const Pose2 odometry_moved = Pose2{}.inverse() * slipped;  // The odometry starts at the origin.
+  EXPECT_GT(std::abs(wrap_angle(odometry_moved.yaw_rad - moved_truth.yaw_rad)), 20.0 * kDeg);
+}
+
 // A corridor with nothing ahead: the scans say nothing about the motion along it. The
 // registration holds the seed along it instead of sliding. (Its degeneracy measure does not yet
 // flag such scans: the noisy normals of far, grazing returns give information along the

@@ -73,11 +73,13 @@ struct FilterCounters {
   std::int64_t beams_kept_explained = 0;
   /// Registration (when on): scans aligned with the map, scans that fell back to their seed
   /// (odometry or constant velocity), registered scans with an unconstrained direction, and
-  /// scans registered without odometry.
+  /// scans registered without odometry, and scans registered from the constant-velocity guess
+  /// because the odometry slipped (RegistrationReport::odometry_overruled).
   std::int64_t scans_registered = 0;
   std::int64_t registration_fallbacks = 0;
   std::int64_t registration_degenerate = 0;
   std::int64_t scans_without_odometry = 0;
+  std::int64_t odometry_overruled = 0;
 };
 
 /// A tracked object as reported to the caller. Positions and velocities are in the fixed frame.

@@ -86,6 +86,9 @@ struct RegistrationReport {
   bool fallback = false;    ///< Could not register: the seed was used.
   bool degenerate = false;  ///< Registered, with a direction the scan does not constrain.
   bool seeded_by_odometry = false;
+  /// The odometry's motion and the constant-velocity guess parted (a wheel slipped), and the
+  /// guess matched clearly more of the scan: registered from the guess.
+  bool odometry_overruled = false;
   std::int32_t points = 0;  ///< Points of the thinned scan.
   std::int32_t iterations = 0;
   double inlier_share = 0.0;  ///< Share of the points with a correspondence.
@@ -149,6 +152,7 @@ class ScanRegistration {
   Key key_of(const Eigen::Vector2d& p) const;
   bool structure(const Voxel& v) const;
   std::int32_t gather_candidates(const Pose2& pose, int reach, double radius, bool structure_only);
+  Pose2 align(const Pose2& seed, const Pose2& delta, double threshold, RegistrationReport& report);
   void thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s, bool deskew_wanted);
   Eigen::Vector2d normal_at(std::size_t b) const;
 

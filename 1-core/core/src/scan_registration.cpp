@@ -29,10 +29,11 @@ constexpr double kMinMotionForThreshold_m = 0.02;
 // The odometry's motion and the constant-velocity guess part by more than a robot's motors can
 // change within a scan (1.5 rad/s^2 over a scan of 0.13 s moves the heading by 0.03 rad more than
 // the guess): the guess is tried as a seed too. It replaces the odometry's alignment when it
-// matches this much more of the scan (or the odometry's did not register).
+// matches this much more of the scan (or the odometry's did not register); with 0.1 Debian's
+// wheelchair log had 4 scans overruled and 16 beams removed, with 0.2 two and none.
 constexpr double kSeedsApart_rad = 0.05;
 constexpr double kSeedsApart_m = 0.15;
-constexpr double kBetterShare = 0.1;
+constexpr double kBetterShare = 0.2;
 // Voxels hit by fewer scans than structure needs are forgotten when unseen this long (the trail
 // of someone walking by).
 constexpr double kTransientMemory_s = 2.0;

@@ -25,19 +25,6 @@ constexpr double kCornerRadius_m = 0.5;
 constexpr double kCornerTurn_rad = 20.0 * kPi / 180.0;
 constexpr double kLookahead_m = 1.0;  // The robot steers for a point this far ahead on its leg.
 
-// True when the segments p0-p1 and a-b cross (touching counts).
-bool segments_cross(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1, const Eigen::Vector2d& a,
-                    const Eigen::Vector2d& b) {
-  const auto side = [](const Eigen::Vector2d& o, const Eigen::Vector2d& u,
-                       const Eigen::Vector2d& q) {
-    const double c = (u - o).x() * (q - o).y() - (u - o).y() * (q - o).x();
-    return (c > 0.0) - (c < 0.0);
-  };
-  const int s0 = side(a, b, p0), s1 = side(a, b, p1), s2 = side(p0, p1, a), s3 = side(p0, p1, b);
-  if (s0 == 0 && s1 == 0) return false;  // Along the wall's line: not through it.
-  return s0 != s1 && s2 != s3;
-}
-
 constexpr auto reject = reject_field;
 
 // The path a robot or actor follows: waypoints in order, optionally looping.
@@ -700,9 +687,10 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
     };
     if (!robot_path.done()) {
       const Eigen::Vector2d reached = robot_path.target();
-      if (robot_path.advance_if_reached(pose.translation(),
-                                        corner_at_target() ? kCornerRadius_m : 0.15)) {
+      bool corner = corner_at_target();
+      if (robot_path.advance_if_reached(pose.translation(), corner ? kCornerRadius_m : 0.15)) {
         leg_from = reached;
+        corner = corner_at_target();
       }
       if (!robot_path.done()) {
         const Eigen::Vector2d to = robot_path.target() - pose.translation();
@@ -718,7 +706,7 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
         const double err = wrap_angle(std::atan2(to_aim.y(), to_aim.x()) - pose.yaw_rad);
         w_cmd = std::clamp(2.0 * err, -kMaxTurnRate, kMaxTurnRate);
         v_cmd = scenario.robot.speed_mps * std::max(0.0, std::cos(err));
-        if (corner_at_target()) {
+        if (corner) {
           const double v_corner = kMaxTurnRate * kCornerRadius_m;
           const double braking = std::max(0.0, to.norm() - kCornerRadius_m);
           v_cmd =
@@ -730,8 +718,10 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
     w += std::clamp(w_cmd - w, -kMaxAngularAcceleration * kStep, kMaxAngularAcceleration * kStep);
     const Eigen::Vector2d was = pose.translation();
     pose = pose * Pose2{v * kStep, 0.0, w * kStep};
+    const Eigen::Vector2d moved = pose.translation() - was;
+    const double moved_m = moved.norm();
     for (const Segment& wall : solid) {
-      if (!segments_cross(was, pose.translation(), wall.a, wall.b)) continue;
+      if (!(moved_m > 0.0 && ray_distance(wall, was, moved / moved_m) <= moved_m)) continue;
       std::ostringstream m;
       m.setf(std::ios::fixed);
       m.precision(2);

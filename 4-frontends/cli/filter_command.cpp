@@ -88,6 +88,7 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
   j["config"] = {
       {"min_points", s.config.segmentation.min_points},
       {"cluster_gap_m", s.config.segmentation.cluster_gap_m},
+      {"min_width_m", s.config.segmentation.min_width_m},
       {"presumption",
        s.config.classification.presumption == Presumption::kGuilt ? "guilt" : "innocence"},
       {"dynamic_weight_limit", s.config.classification.dynamic_weight_limit},

@@ -94,7 +94,9 @@ inline void expect_consistent(const LaserScan& scan, const Segmentation& seg,
     const ScanObject& o = seg.objects[k];
     ASSERT_FALSE(beams[k].empty());
     EXPECT_EQ(static_cast<std::int32_t>(beams[k].size()), o.point_count);
-    EXPECT_GE(o.point_count, config.min_points);
+    // min_width_m lowers N_min with range, never below 2 (a single beam is noise).
+    EXPECT_GE(o.point_count,
+              config.min_width_m > 0.0 ? std::min(2, config.min_points) : config.min_points);
     EXPECT_EQ(seg.beam_labels[o.first_beam], static_cast<std::int32_t>(k));
     EXPECT_EQ(seg.beam_labels[o.last_beam], static_cast<std::int32_t>(k));
     EXPECT_LT((o.first_point_m - point_of(scan, o.first_beam)).norm(), 1e-4);

@@ -144,6 +144,9 @@ void SegmentationConfig::validate() const {
   if (min_points < 1) {
     reject("segmentation.min_points must be >= 1, got " + str(min_points));
   }
+  if (!std::isfinite(min_width_m) || min_width_m < 0.0) {
+    reject("segmentation.min_width_m must be a finite number >= 0, got " + str(min_width_m));
+  }
   if (gap_metric != GapMetric::kEuclidean && gap_metric != GapMetric::kRangeDifference) {
     reject("segmentation.gap_metric has an unknown value " + str(static_cast<int>(gap_metric)));
   }
@@ -401,12 +404,33 @@ EdgeNeighbour Segmenter::neighbour_of(const LaserScan& scan, std::int32_t beam, 
   return scan.ranges_m[j] < scan.ranges_m[beam] ? EdgeNeighbour::kCloser : EdgeNeighbour::kFarther;
 }
 
+std::int32_t Segmenter::min_points_of(const LaserScan& scan, const Object& obj) const {
+  const std::int32_t n_min = config_.min_points;
+  if (!(config_.min_width_m > 0.0) || n_min <= 2 || obj.count >= n_min) return n_min;
+  // The beams an object min_width_m wide covers at the range of this one's centroid.
+  const double range =
+      std::hypot(obj.sum_x, obj.sum_y) / static_cast<double>(std::max<std::int32_t>(obj.count, 1));
+  const double covered = config_.min_width_m / (range * cached_increment_rad_);
+  if (!(covered < static_cast<double>(n_min))) return n_min;  // Also a range of 0 (inf, NaN).
+  // Only a thing that stands out whole in front of what is beside it (a leg against the far
+  // wall or against nothing): a piece of a wall seen at a slant, or a thing cut by the view's
+  // end or by something nearer, is no object below min_points.
+  const auto stands_out = [](EdgeNeighbour e) {
+    return e == EdgeNeighbour::kFarther || e == EdgeNeighbour::kInvalid;
+  };
+  if (!stands_out(neighbour_of(scan, clusters_[obj.first_cluster].first_beam, -1)) ||
+      !stands_out(neighbour_of(scan, clusters_[obj.last_cluster].last_beam, +1))) {
+    return n_min;
+  }
+  return std::max<std::int32_t>(2, static_cast<std::int32_t>(std::lround(covered)));
+}
+
 void Segmenter::write_objects(const LaserScan& scan, Segmentation& out) {
   // Objects with at least N_min points survive, ordered by first beam.
   order_.clear();
   for (std::int32_t o = 0; o < static_cast<std::int32_t>(work_objects_.size()); ++o) {
     const Object& obj = work_objects_[o];
-    if (obj.alive && obj.count >= config_.min_points) order_.push_back(o);
+    if (obj.alive && obj.count >= min_points_of(scan, obj)) order_.push_back(o);
     if (obj.alive && obj.cluster_count > 1) out.merges += obj.cluster_count - 1;
   }
   std::sort(order_.begin(), order_.end(), [&](std::int32_t a, std::int32_t b) {

@@ -57,6 +57,11 @@ TEST(SegmentationConfig, BadValuesAreRejectedByName) {
   c.min_points = 0;
   expect_rejected(c, "min_points");
   c = SegmentationConfig{};
+  c.min_width_m = -0.1;
+  expect_rejected(c, "min_width_m");
+  c.min_width_m = std::numeric_limits<double>::infinity();
+  expect_rejected(c, "min_width_m");
+  c = SegmentationConfig{};
   c.masked_sectors = {{0.5, 0.2}};
   expect_rejected(c, "masked_sectors[0]");
   c.masked_sectors = {{0.0, 0.1}, {0.0, 7.0}};
@@ -238,6 +243,67 @@ TEST(Segmentation, ClustersBelowMinPointsAreNoise) {
   const Segmentation all = keep_all.segment(scan);
   EXPECT_EQ(all.noise_beams, 0);
   EXPECT_NE(object_near(all, {1.99, 0.0}, 0.05), nullptr);
+}
+
+// A 768-beam, 270-degree scanner (0.352 degrees), N_min 4 as --scale-to-scanner makes it.
+ScanGeometry scanner_768() { return {-135.0 * kDeg, 270.0 * kDeg / 767.0, 768, 0.05F, 30.0F}; }
+
+std::int32_t beams_nearer_than(const LaserScan& scan, float range_m) {
+  return static_cast<std::int32_t>(std::count_if(scan.ranges_m.begin(), scan.ranges_m.end(),
+                                                 [&](float r) { return r < range_m; }));
+}
+
+TEST(Segmentation, ALegAtRangeIsAnObjectWhenNminFallsWithItsWidth) {
+  // A leg 12 cm across at 7 m in front of a wall at 10 m, and one against nothing.
+  World world;
+  world.segments = {wall(10.0, -10.0, 10.0, 1.0)};
+  world.circles = {{{7.0, 0.0}, 0.06}, {{0.0, 7.0}, 0.06}};
+  const LaserScan scan = cast(world, scanner_768());
+
+  SegmentationConfig config;
+  config.min_points = 4;
+  const Segmentation fixed = Segmenter{config}.segment(scan);
+  expect_consistent(scan, fixed, config);
+  EXPECT_EQ(object_near(fixed, {6.95, 0.0}, 0.1), nullptr);
+  EXPECT_EQ(object_near(fixed, {0.0, 6.95}, 0.1), nullptr);  // Each leg is below N_min.
+
+  config.min_width_m = 0.1;  // 0.1 m at 7 m is 2.3 beams: N_min 2 there.
+  const Segmentation by_width = Segmenter{config}.segment(scan);
+  expect_consistent(scan, by_width, config);
+  for (const Eigen::Vector2d& leg : {Eigen::Vector2d(6.95, 0.0), Eigen::Vector2d(0.0, 6.95)}) {
+    const ScanObject* o = object_near(by_width, leg, 0.1);
+    ASSERT_NE(o, nullptr);
+    EXPECT_GE(o->point_count, 2);
+    EXPECT_LE(o->point_count, 3);
+  }
+  EXPECT_EQ(by_width.noise_beams, fixed.noise_beams - beams_nearer_than(scan, 7.5F));
+  // A thin thing at 9 m (0.1 m there is 1.8 beams): one beam stays noise.
+  world.circles = {{{6.36, 6.36}, 0.02}};
+  const LaserScan cable = cast(world, scanner_768());
+  ASSERT_EQ(beams_nearer_than(cable, 9.5F), 1);
+  EXPECT_EQ(Segmenter{config}.segment(cable).objects.size(), 1U);  // The wall alone.
+}
+
+TEST(Segmentation, APieceCutByWhatIsBesideItStaysNoiseWhateverItsWidth) {
+  // Three beams at 6 m against nothing; three more beside something nearer; three at the end of
+  // the view. Only the first stand out whole: the others may be part of something larger.
+  LaserScan scan = cast(World{}, scanner_768());
+  const auto set = [&](std::size_t from, std::size_t to, float range) {
+    for (std::size_t i = from; i <= to; ++i) scan.ranges_m[i] = range;
+  };
+  set(300, 302, 6.0F);
+  set(400, 402, 6.0F);
+  set(403, 412, 3.0F);  // A pillar beside the second piece.
+  set(0, 2, 6.0F);
+  SegmentationConfig config;
+  config.min_points = 4;
+  config.min_width_m = 0.1;
+  const Segmentation seg = Segmenter{config}.segment(scan);
+  expect_consistent(scan, seg, config);
+  EXPECT_EQ(seg.objects.size(), 2U);
+  EXPECT_GE(seg.beam_labels[301], 0);
+  EXPECT_GE(seg.beam_labels[405], 0);
+  for (std::size_t i : {0, 1, 2, 400, 401, 402}) EXPECT_EQ(seg.beam_labels[i], kLabelNoise) << i;
 }
 
 TEST(Segmentation, InvalidBeamsAreNeverObjectsAndDoNotCutASurface) {

@@ -118,6 +118,7 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   b.section("segmentation");
   b.number("segmentation.cluster_gap_m", s.cluster_gap_m);
   b.integer("segmentation.min_points", s.min_points);
+  b.number("segmentation.min_width_m", s.min_width_m);
   b.choice<GapMetric>(
       "segmentation.gap_metric", s.gap_metric,
       {{"euclidean", GapMetric::kEuclidean}, {"range_difference", GapMetric::kRangeDifference}});

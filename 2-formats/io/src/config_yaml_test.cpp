@@ -26,6 +26,7 @@ void expect_error(const std::string& yaml, const std::string& expected) {
 void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d) {
   EXPECT_EQ(loaded.segmentation.cluster_gap_m, d.segmentation.cluster_gap_m);
   EXPECT_EQ(loaded.segmentation.min_points, d.segmentation.min_points);
+  EXPECT_EQ(loaded.segmentation.min_width_m, d.segmentation.min_width_m);
   EXPECT_EQ(loaded.segmentation.gap_metric, d.segmentation.gap_metric);
   EXPECT_EQ(loaded.segmentation.masked_sectors.size(), d.segmentation.masked_sectors.size());
   EXPECT_EQ(loaded.tracking.match_distance_m, d.tracking.match_distance_m);
@@ -131,7 +132,7 @@ TEST(ConfigYaml, PresetIsTheStartingPointWhereverItStands) {
 
 TEST(ConfigYaml, ValuesAreReadIntoTheirFields) {
   const DynamicFilterConfig c = parse_filter_config(
-      "segmentation: {cluster_gap_m: 0.2, gap_metric: range_difference,"
+      "segmentation: {cluster_gap_m: 0.2, gap_metric: range_difference, min_width_m: 0.15,"
       " masked_sectors: [[-0.5, -0.1], [0.1, 0.5]]}\n"
       "tracking: {matching: nearest_neighbour}\n"
       "classification: {presumption: guilt, static_weight_limit: 20}\n"
@@ -139,6 +140,7 @@ TEST(ConfigYaml, ValuesAreReadIntoTheirFields) {
       "test.yaml");
   EXPECT_EQ(c.segmentation.cluster_gap_m, 0.2);
   EXPECT_EQ(c.segmentation.gap_metric, GapMetric::kRangeDifference);
+  EXPECT_EQ(c.segmentation.min_width_m, 0.15);
   ASSERT_EQ(c.segmentation.masked_sectors.size(), 2u);
   EXPECT_EQ(c.segmentation.masked_sectors[1].end_rad, 0.5);
   EXPECT_EQ(c.tracking.matching, Matching::kNearestNeighbour);
@@ -158,6 +160,7 @@ TEST(ConfigYaml, UnknownKeysWrongTypesAndBadValuesAreErrorsNamingTheKey) {
   expect_error("max_time_gap_s: 1\nmax_time_gap_s: 2\n", "key 'max_time_gap_s' is given twice");
   expect_error("segmentation: {cluster_gap_m: -0.1}", "segmentation.cluster_gap_m must be");
   expect_error("segmentation: {min_points: many}", "segmentation.min_points must be an integer");
+  expect_error("segmentation: {min_width_m: -0.1}", "segmentation.min_width_m must be");
   expect_error("tracking: {matching: psychic}", "tracking.matching must be one of");
   expect_error("classification: {presumption: [1]}", "classification.presumption must be");
   expect_error("velocity: {velocity_decay: 2}", "velocity.velocity_decay must be in [0, 1]");

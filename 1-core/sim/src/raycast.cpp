@@ -1,6 +1,8 @@
 #include "dispel/sim/raycast.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 namespace dispel::sim {
@@ -39,6 +41,21 @@ double ray_distance(const Circle& shape, const Eigen::Vector2d& origin,
   return far >= 0.0 ? far : kInf;
 }
 
+namespace {
+
+// A number in [0, 1) drawn from the seed, the circle and the beam's direction (splitmix64).
+double flicker_draw(std::uint64_t seed, std::size_t circle, double bearing_rad) {
+  std::uint64_t bits = 0;
+  std::memcpy(&bits, &bearing_rad, sizeof bits);
+  std::uint64_t z = seed ^ (bits * 0x9e3779b97f4a7c15ULL) ^ (circle * 0xbf58476d1ce4e5b9ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53;
+}
+
+}  // namespace
+
 LaserScan raycast(const World& world, const Pose2& sensor_pose, const ScanGeometry& geometry,
                   std::vector<std::int32_t>* hit_shape) {
   LaserScan scan;
@@ -64,8 +81,11 @@ LaserScan raycast(const World& world, const Pose2& sensor_pose, const ScanGeomet
       }
     }
     for (std::size_t c = 0; c < world.circles.size(); ++c) {
-      const double t = ray_distance(world.circles[c], origin, direction);
-      if (t < best && t <= world.circles[c].seen_within_m) {
+      const Circle& circle = world.circles[c];
+      const double t = ray_distance(circle, origin, direction);
+      if (t < best && t <= circle.seen_within_m &&
+          (circle.return_share >= 1.0 ||
+           flicker_draw(world.flicker_seed, c, bearing) < circle.return_share)) {
         best = t;
         best_id = segment_count + static_cast<std::int32_t>(c);
       }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace dispel::sim {
@@ -51,6 +52,43 @@ TEST(Raycast, ALowThingIsHitOnlyFromNearerThanItsSeenWithin) {
   LaserScan near = raycast(world, Pose2{0.5, 0.0, 0.0}, g, &hit);  // 1.3 m to its face.
   EXPECT_NEAR(near.ranges_m[0], 1.3F, 1e-5F);
   EXPECT_EQ(hit[0], 1);
+}
+
+TEST(Raycast, AThingThatReturnsSomeBeamsLetsTheOthersThroughDifferentlyInEachScan) {
+  // A bush 1 m across at 2 m before a wall at 4 m, returning 40 % of the beams that reach it.
+  World world;
+  world.segments = {{{4.0, -3.0}, {4.0, 3.0}}};
+  Circle bush{{2.0, 0.0}, 0.5};
+  bush.return_share = 0.4;
+  world.circles = {bush};
+  const ScanGeometry g{-0.2, 0.001, 401, 0.1F, 10.0F};  // 0.4 rad: all of it, beams 2 mm apart.
+  std::vector<std::int32_t> hit, before;
+  int returned = 0, reached = 0, changed = 0;
+  for (std::uint64_t scan = 0; scan < 10; ++scan) {
+    world.flicker_seed = scan;
+    const LaserScan s = raycast(world, Pose2{}, g, &hit);
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const double bearing = s.bearing_rad(i);
+      if (std::abs(2.0 * std::tan(bearing)) >= 0.45) continue;  // Not surely through the bush.
+      ++reached;
+      if (hit[i] == 1) {
+        ++returned;
+        EXPECT_LT(s.ranges_m[i], 2.0F);
+      } else {
+        EXPECT_EQ(hit[i], 0);  // Through it to the wall.
+      }
+      if (!before.empty() && before[i] != hit[i]) ++changed;
+    }
+    // The same seed draws the same beams.
+    EXPECT_EQ(raycast(world, Pose2{}, g).ranges_m, s.ranges_m);
+    before = hit;
+  }
+  EXPECT_NEAR(static_cast<double>(returned) / reached, 0.4, 0.05);
+  EXPECT_GT(changed, reached / 4);  // Different beams in each scan (0.48 expected).
+  world.circles[0].return_share = 1.0;
+  raycast(world, Pose2{}, g, &hit);
+  EXPECT_EQ(std::count(hit.begin(), hit.end(), 0) + std::count(hit.begin(), hit.end(), 1), 401);
+  EXPECT_EQ(hit[200], 1);
 }
 
 TEST(Raycast, HitsBeyondRangeMaxAreNoReturn) {

@@ -201,6 +201,48 @@ void add_rough_wall(const Segment& wall, const RoughWalls& rw, std::mt19937_64& 
   }
 }
 
+// Distance from p to the path through @p points (to the point itself when there is one).
+double distance_to_path(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& points,
+                        bool closed) {
+  double best = std::numeric_limits<double>::infinity();
+  const std::size_t n = points.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d& a = points[i];
+    const Eigen::Vector2d& b = i + 1 < n ? points[i + 1] : (closed ? points[0] : points[i]);
+    const Eigen::Vector2d ab = b - a;
+    const double t =
+        ab.squaredNorm() > 0.0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+    best = std::min(best, (a + t * ab - p).norm());
+  }
+  return best;
+}
+
+// Clutter: count things placed at random in the area, each keep_clear_m (plus its radius) from
+// the robot's path and every actor's; a place tried 100 times without success is left empty.
+void add_clutter(const Clutter& clutter, const std::vector<Eigen::Vector2d>& robot_points,
+                 const std::vector<Actor>& actors, std::mt19937_64& rng, World& out) {
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  for (int k = 0; k < clutter.count; ++k) {
+    const double radius =
+        clutter.min_radius_m + u01(rng) * (clutter.max_radius_m - clutter.min_radius_m);
+    for (int attempt = 0; attempt < 100; ++attempt) {
+      const Eigen::Vector2d p(
+          clutter.area_min.x() + u01(rng) * (clutter.area_max.x() - clutter.area_min.x()),
+          clutter.area_min.y() + u01(rng) * (clutter.area_max.y() - clutter.area_min.y()));
+      const double clear = clutter.keep_clear_m + radius;
+      bool ok = distance_to_path(p, robot_points, true) >= clear;
+      for (std::size_t a = 0; ok && a < actors.size(); ++a) {
+        ok = distance_to_path(p, actors[a].waypoints, actors[a].loop) >= clear;
+      }
+      if (!ok) continue;
+      Circle c{p, radius};
+      c.return_share = clutter.return_share;
+      out.circles.push_back(c);
+      break;
+    }
+  }
+}
+
 // A rack (ShelfRow): uprights at every bay, a box in each bay with probability fill.
 void add_shelf_row(const ShelfRow& row, std::mt19937_64& rng, World& out) {
   std::uniform_real_distribution<double> u01(0.0, 1.0);
@@ -316,6 +358,24 @@ void Scenario::validate() const {
       reject("world.rough_walls.glass_share", w.glass_share, "in [0, 1)");
     if (!(w.low_things_per_10m >= 0.0 && w.low_things_per_10m <= 20.0))
       reject("world.rough_walls.low_things_per_10m", w.low_things_per_10m, "in [0, 20]");
+  }
+  const Clutter& clutter = world.clutter;
+  if (clutter.count < 0 || clutter.count > 100000)
+    reject("world.clutter.count", clutter.count, "in [0, 100000]");
+  if (clutter.count > 0) {
+    if (!(clutter.area_max.array() > clutter.area_min.array()).all() ||
+        !((clutter.area_max - clutter.area_min).norm() <= 10000.0)) {
+      throw std::invalid_argument(
+          "world.clutter.area must have max > min in x and y, at most 10 km apart");
+    }
+    if (!(clutter.min_radius_m > 0.0 && clutter.min_radius_m <= clutter.max_radius_m &&
+          clutter.max_radius_m <= 2.0)) {
+      reject("world.clutter.radius_m", clutter.max_radius_m, "0 < min <= max <= 2");
+    }
+    if (!(clutter.return_share > 0.0 && clutter.return_share <= 1.0))
+      reject("world.clutter.return_share", clutter.return_share, "in (0, 1]");
+    if (!(clutter.keep_clear_m >= 0.0 && clutter.keep_clear_m <= 100.0))
+      reject("world.clutter.keep_clear_m", clutter.keep_clear_m, "in [0, 100]");
   }
   for (std::size_t i = 0; i < world.shelves.size(); ++i) {
     const ShelfRow& r = world.shelves[i];
@@ -508,6 +568,11 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
   }
   base.circles.insert(base.circles.end(), scenario.world.circles.begin(),
                       scenario.world.circles.end());
+  {
+    std::vector<Eigen::Vector2d> robot_route = robot_points;  // From where the robot starts.
+    robot_route.insert(robot_route.begin(), scenario.robot.start.translation());
+    add_clutter(scenario.world.clutter, robot_route, specs, world_rng, base);
+  }
   // What the robot must never drive through: the walls as drawn (rough walls' pieces have gaps
   // for glass), rectangles and the lines of the shelf rows.
   std::vector<Segment> solid = scenario.world.walls;
@@ -597,6 +662,7 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
     }
     if (step % scan_every == 0) {
       World world = base;
+      world.flicker_seed = seed * 0x9e3779b97f4a7c15ULL + static_cast<std::uint64_t>(step);
       std::vector<std::int32_t> actor_of_segment, actor_of_circle;
       for (std::size_t a = 0; a < actors.size(); ++a) {
         const ActorState& s = actors[a];

@@ -357,6 +357,46 @@ TEST(Simulator, LowThingsAreSeenOnlyFromNearby) {
   EXPECT_GT(wall, 200);
 }
 
+TEST(Simulator, ClutterStandsClearOfEveryPathAndFlickers) {
+  Scenario s = room_with_walker();  // A still robot at the origin, a walker along x = 2.
+  s.duration_s = 1.0;
+  Clutter& c = s.world.clutter;
+  c.count = 300;
+  c.area_min = {-4.5, -4.5};
+  c.area_max = {4.5, 4.5};
+  c.min_radius_m = 0.02;
+  c.max_radius_m = 0.1;
+  c.return_share = 0.5;
+  c.keep_clear_m = 1.0;
+  const SimulationOutput out = simulate(s, 9);
+  ASSERT_GE(out.scans.size(), 10U);
+  std::vector<std::vector<char>> clutter_beams;
+  int clutter_returns = 0;
+  for (const ScanFrame& f : out.scans) {
+    const Pose2 laser = f.base_pose * s.robot.laser_mount;
+    std::vector<char>& beams = clutter_beams.emplace_back(f.scan.size(), 0);
+    for (std::size_t i = 0; i < f.scan.size(); ++i) {
+      if (f.truth[i] != Truth::kStatic) continue;
+      const Eigen::Vector2d p = beam_point(f, laser, i);
+      if (std::max(std::abs(p.x()), std::abs(p.y())) > 4.9) continue;  // A wall.
+      if ((p - Eigen::Vector2d(-3.0, 3.0)).norm() < 0.35) continue;    // The pillar.
+      beams[i] = 1;
+      ++clutter_returns;
+      EXPECT_GE(p.norm(), 1.0) << "clutter within keep_clear_m of where the robot stands";
+      if (p.y() >= -3.0 && p.y() <= 1.0) {
+        EXPECT_GE(std::abs(p.x() - 2.0), 1.0) << "clutter within keep_clear_m of the walker's path";
+      }
+    }
+  }
+  EXPECT_GT(clutter_returns, 500);
+  // The robot stands still: which beams the clutter returns changes from scan to scan.
+  int switched = 0;
+  for (std::size_t i = 0; i < clutter_beams[0].size(); ++i) {
+    switched += clutter_beams[0][i] != clutter_beams[1][i] ? 1 : 0;
+  }
+  EXPECT_GT(switched, clutter_returns / static_cast<int>(out.scans.size()) / 4);
+}
+
 // Range noise that grows with range, and mixed pixels at depth edges.
 TEST(Simulator, NoiseGrowsWithRangeAndMixedPixelsFallBetweenSurfaces) {
   Scenario s = room_with_walker();
@@ -421,6 +461,18 @@ TEST(Scenario, BadValuesAreRejectedByName) {
       EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
     }
   };
+  s = Scenario{};
+  s.world.clutter.count = 1000000;
+  expect_named(s, "world.clutter.count");
+  s.world.clutter.count = 10;
+  expect_named(s, "world.clutter.area");  // No area given.
+  s.world.clutter.area_max = {10.0, 10.0};
+  EXPECT_NO_THROW(s.validate());
+  s.world.clutter.return_share = 0.0;
+  expect_named(s, "world.clutter.return_share");
+  s.world.clutter.return_share = 0.5;
+  s.world.clutter.max_radius_m = std::numeric_limits<double>::quiet_NaN();
+  expect_named(s, "world.clutter.radius_m");
   // What cannot finish is refused before any work, naming the key and the limit: stamps past
   // 2^32 s, people ray-cast per beam; the held run also by its memory (the thesis's scanner at
   // 20 Hz: about 4 h in 4 GiB), the streamed one not.

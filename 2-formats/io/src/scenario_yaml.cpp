@@ -81,8 +81,33 @@ class Reader {
   std::string origin_;
 };
 
+// A pair [low, high] of key @p key of @p n (at @p path), if given, into @p low and @p high: an
+// area's corners (4 numbers) or a range (2).
+void read_pair(const Reader& r, const YAML::Node& n, const char* key, const std::string& path,
+               double* low, double* high, std::size_t count) {
+  if (!n[key]) return;
+  const auto v = r.numbers(n[key], path + "." + key, count);
+  for (std::size_t i = 0; i < count / 2; ++i) {
+    low[i] = v[i];
+    high[i] = v[count / 2 + i];
+  }
+}
+
 void read_world(const Reader& r, const YAML::Node& n, sim::StaticWorld& w) {
-  r.keys(n, "world", {"walls", "polylines", "rectangles", "circles", "shelves", "rough_walls"});
+  r.keys(n, "world",
+         {"walls", "polylines", "rectangles", "circles", "shelves", "rough_walls", "clutter"});
+  if (n["clutter"]) {
+    const YAML::Node& e = n["clutter"];
+    sim::Clutter& c = w.clutter;
+    r.keys(e, "world.clutter", {"count", "area", "radius_m", "return_share", "keep_clear_m"});
+    if (e["count"]) c.count = r.integer(e["count"], "world.clutter.count");
+    read_pair(r, e, "area", "world.clutter", c.area_min.data(), c.area_max.data(), 4);
+    read_pair(r, e, "radius_m", "world.clutter", &c.min_radius_m, &c.max_radius_m, 2);
+    if (e["return_share"])
+      c.return_share = r.number(e["return_share"], "world.clutter.return_share");
+    if (e["keep_clear_m"])
+      c.keep_clear_m = r.number(e["keep_clear_m"], "world.clutter.keep_clear_m");
+  }
   if (n["rough_walls"]) {
     const YAML::Node& e = n["rough_walls"];
     r.keys(e, "world.rough_walls",
@@ -265,16 +290,8 @@ void read_actors(const Reader& r, const YAML::Node& n, std::vector<sim::Actor>& 
 void read_random_people(const Reader& r, const YAML::Node& n, sim::RandomPeople& p) {
   r.keys(n, "random_people", {"count", "area", "speed_mps", "max_pause_s", "waypoints", "loop"});
   if (n["count"]) p.count = r.integer(n["count"], "random_people.count");
-  if (n["area"]) {
-    const auto a = r.numbers(n["area"], "random_people.area", 4);
-    p.area_min = {a[0], a[1]};
-    p.area_max = {a[2], a[3]};
-  }
-  if (n["speed_mps"]) {
-    const auto s = r.numbers(n["speed_mps"], "random_people.speed_mps", 2);
-    p.min_speed_mps = s[0];
-    p.max_speed_mps = s[1];
-  }
+  read_pair(r, n, "area", "random_people", p.area_min.data(), p.area_max.data(), 4);
+  read_pair(r, n, "speed_mps", "random_people", &p.min_speed_mps, &p.max_speed_mps, 2);
   if (n["max_pause_s"]) p.max_pause_s = r.number(n["max_pause_s"], "random_people.max_pause_s");
   if (n["waypoints"]) p.waypoints = r.integer(n["waypoints"], "random_people.waypoints");
   if (n["loop"]) p.loop = r.boolean(n["loop"], "random_people.loop");

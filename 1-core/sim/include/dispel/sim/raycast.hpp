@@ -26,12 +26,18 @@ struct Circle {
   /// Beams that reach it from farther than this pass over it (a chair seat or a box just below a
   /// scan plane tilted up: only the near part of the plane is low enough to hit it).
   double seen_within_m = std::numeric_limits<double>::infinity();
+  /// The share of the beams reaching it that return from it (foliage, a wire basket, a chair's
+  /// open back): each other beam passes through, as if it were not there. Which beams pass is
+  /// drawn from World::flicker_seed and the beam's direction, so it changes from scan to scan.
+  double return_share = 1.0;
 };
 
 /// Everything a beam can hit. Shape ids: segments are 0..S-1, circles S..S+C-1.
 struct World {
   std::vector<Segment> segments;
   std::vector<Circle> circles;
+  /// Draws which beams pass through circles whose return_share is below 1 (change it per scan).
+  std::uint64_t flicker_seed = 0;
 };
 
 /// The beams of a scanner.

@@ -51,6 +51,21 @@ struct ShelfRow {
   double fill = 0.7;
 };
 
+/// Small things standing about, drawn from the seed: posts, plants, bins, chair legs, each a
+/// circle whose beams flicker (return_share: foliage, a wire basket, an open chair back return
+/// some beams and let the others through, differently in every scan), placed keep_clear_m or more
+/// from the robot's path and every actor's path. Real recordings are full of them; seen from afar
+/// they are a few beams each.
+struct Clutter {
+  int count = 0;
+  Eigen::Vector2d area_min = Eigen::Vector2d::Zero();
+  Eigen::Vector2d area_max = Eigen::Vector2d::Zero();
+  double min_radius_m = 0.02;  ///< Radius drawn uniformly between these.
+  double max_radius_m = 0.15;
+  double return_share = 0.6;  ///< Share of the beams reaching a thing that return from it.
+  double keep_clear_m = 1.0;
+};
+
 /// Static structure.
 struct StaticWorld {
   std::vector<Segment> walls;  ///< Walls and polyline pieces.
@@ -59,6 +74,7 @@ struct StaticWorld {
   std::vector<ShelfRow> shelves;
   /// When set, every wall is made rough (rectangles, circles and shelves stay as they are).
   std::optional<RoughWalls> rough_walls;
+  Clutter clutter;
 };
 
 /// The thesis's lawnmower pattern: straight lanes along x joined by half-circle U-turns.

@@ -201,18 +201,23 @@ void add_rough_wall(const Segment& wall, const RoughWalls& rw, std::mt19937_64& 
   }
 }
 
+// Distance from p to the segment from a to b (to a when they coincide).
+double distance_to_segment(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                           const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double t =
+      ab.squaredNorm() > 0.0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).norm();
+}
+
 // Distance from p to the path through @p points (to the point itself when there is one).
 double distance_to_path(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& points,
                         bool closed) {
   double best = std::numeric_limits<double>::infinity();
   const std::size_t n = points.size();
   for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector2d& a = points[i];
     const Eigen::Vector2d& b = i + 1 < n ? points[i + 1] : (closed ? points[0] : points[i]);
-    const Eigen::Vector2d ab = b - a;
-    const double t =
-        ab.squaredNorm() > 0.0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-    best = std::min(best, (a + t * ab - p).norm());
+    best = std::min(best, distance_to_segment(p, points[i], b));
   }
   return best;
 }
@@ -502,10 +507,7 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
   }
   const auto clear_path = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
     for (const auto& [c, r] : obstacles) {
-      const Eigen::Vector2d ab = b - a;
-      const double t =
-          ab.squaredNorm() > 0.0 ? std::clamp((c - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-      if ((a + t * ab - c).norm() < r) return false;
+      if (distance_to_segment(c, a, b) < r) return false;
     }
     return true;
   };

@@ -656,41 +656,52 @@ DynamicFilter::Track DynamicFilter::new_track(const Observation& obs, double sta
 // map knows, hit since) has moved there: it is dynamic at once, unless it is too large to be.
 void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan,
                                                const Segmentation& segmentation) {
+  const std::size_t n = segmentation.objects.size();
+  // Which objects the free space could mark (the rest are not asked about: most of a scan is
+  // surfaces the map explains or tracks too old for it), and the points in free space each of
+  // them needs.
+  const auto could_mark = [&](std::size_t i) {
+    const ScanObject& o = segmentation.objects[i];
+    const Track& t = tracks_[static_cast<std::size_t>(track_of_object_[i])];
+    return (o.last_point_m - o.first_point_m).norm() <=
+               config_.classification.max_dynamic_extent_m &&
+           observations_[i].explained_share < kExplainedShare &&
+           observations_[i].recurring_share < kRecurringObjectShare &&
+           t.age_scans <= kFreeSpaceMaxAge && !t.free_space_refuted &&
+           t.cls.object_class != ObjectClass::kDynamic;
+  };
   // The space must have been seen through by beams dense enough to hit the object: at most half
   // its width apart (a chair leg seen close was missed, not absent, by beams 3 cm apart at 5 m).
-  spacing_limit_.resize(segmentation.objects.size());
-  for (std::size_t i = 0; i < segmentation.objects.size(); ++i) {
+  spacing_limit_.resize(n);
+  points_needed_.resize(n);
+  points_in_free_.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
     const ScanObject& o = segmentation.objects[i];
     spacing_limit_[i] = 0.5 * (o.last_point_m - o.first_point_m).norm();
+    points_needed_[i] = could_mark(i) ? config_.free_space.min_object_share * o.point_count
+                                      : std::numeric_limits<double>::infinity();
   }
-  std::vector<std::int32_t> in_free(segmentation.objects.size(), 0);
   for (std::size_t b = 0; b < scan.size(); ++b) {
     const std::int32_t o = segmentation.beam_labels[b];
     if (o < 0) continue;
-    if (free_space_.known_free(beam_points_[b], spacing_limit_[static_cast<std::size_t>(o)])) {
-      ++in_free[static_cast<std::size_t>(o)];
+    const auto i = static_cast<std::size_t>(o);
+    // Counted until it has enough.
+    if (std::isinf(points_needed_[i]) ||
+        static_cast<double>(points_in_free_[i]) >= points_needed_[i]) {
+      continue;
     }
+    if (free_space_.known_free(beam_points_[b], spacing_limit_[i])) ++points_in_free_[i];
   }
-  for (std::size_t i = 0; i < segmentation.objects.size(); ++i) {
-    const ScanObject& o = segmentation.objects[i];
-    if (static_cast<double>(in_free[i]) < config_.free_space.min_object_share * o.point_count)
-      continue;
-    if ((o.last_point_m - o.first_point_m).norm() > config_.classification.max_dynamic_extent_m) {
-      continue;
-    }
-    if (observations_[i].explained_share >= kExplainedShare) continue;
-    if (observations_[i].recurring_share >= kRecurringObjectShare) continue;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(static_cast<double>(points_in_free_[i]) >= points_needed_[i])) continue;
     Track& t = tracks_[static_cast<std::size_t>(track_of_object_[i])];
-    if (t.age_scans > kFreeSpaceMaxAge || t.free_space_refuted) continue;
-    if (t.cls.object_class != ObjectClass::kDynamic) {
-      t.free_space_pending = true;
-      t.marked_at = observations_[i].points[kCentroid];
-      t.marked_s = scan.stamp_s;
-      t.cls.object_class = ObjectClass::kDynamic;
-      t.cls.dynamic_weight =
-          std::max(t.cls.dynamic_weight, config_.classification.dynamic_weight_limit);
-      t.cls.still_scans = 0;
-    }
+    t.free_space_pending = true;
+    t.marked_at = observations_[i].points[kCentroid];
+    t.marked_s = scan.stamp_s;
+    t.cls.object_class = ObjectClass::kDynamic;
+    t.cls.dynamic_weight =
+        std::max(t.cls.dynamic_weight, config_.classification.dynamic_weight_limit);
+    t.cls.still_scans = 0;
   }
 }
 

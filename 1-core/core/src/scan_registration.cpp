@@ -322,8 +322,7 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
       const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
       // The nearest candidate (the first of equals), used when within the threshold: from
       // the second iteration on, among the point's nearby candidates when they hold it;
-      // among all of them otherwise (finding, from the first iteration on, the nearby ones
-      // around where the point is now). A scan that converges at once pays nothing for it.
+      // among all of them otherwise, finding the nearby ones around where the point is now.
       Nearby& nearby = nearby_[i];
       double best = kInfinity;
       std::int32_t found = -1;
@@ -336,31 +335,27 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
         return d2;
       };
       const std::int32_t begin = candidate_begin_[i], end = candidate_begin_[i + 1];
-      if (iteration == 0) {
-        for (std::int32_t j = begin; j < end; ++j) consider(j);
-      } else {
-        if (iteration > 1 && nearby.count >= 0 &&
-            nearby.nearest_m + (q - nearby.at).norm() + (q - nearby.origin).norm() +
-                    kDistanceMargin_m <=
-                kNearby_m) {
-          for (std::int32_t k = 0; k < nearby.count; ++k) {
-            consider(nearby.index[static_cast<std::size_t>(k)]);
-          }
-        } else {
-          nearby.origin = q;
-          nearby.count = 0;
-          for (std::int32_t j = begin; j < end; ++j) {
-            const double d2 = consider(j);
-            // Without a branch: written at the count (the last slot takes the overflow),
-            // counted when near.
-            nearby.index[static_cast<std::size_t>(std::min(nearby.count, kNearbyMax))] = j;
-            nearby.count += d2 <= kNearby_m * kNearby_m ? 1 : 0;
-          }
-          if (nearby.count > kNearbyMax) nearby.count = -1;
+      if (iteration > 0 && nearby.count >= 0 &&
+          nearby.nearest_m + (q - nearby.at).norm() + (q - nearby.origin).norm() +
+                  kDistanceMargin_m <=
+              kNearby_m) {
+        for (std::int32_t k = 0; k < nearby.count; ++k) {
+          consider(nearby.index[static_cast<std::size_t>(k)]);
         }
-        nearby.at = q;
-        nearby.nearest_m = std::sqrt(best);
+      } else {
+        nearby.origin = q;
+        nearby.count = 0;
+        for (std::int32_t j = begin; j < end; ++j) {
+          const double d2 = consider(j);
+          // Without a branch: written at the count (the last slot takes the overflow),
+          // counted when near.
+          nearby.index[static_cast<std::size_t>(std::min(nearby.count, kNearbyMax))] = j;
+          nearby.count += d2 <= kNearby_m * kNearby_m ? 1 : 0;
+        }
+        if (nearby.count > kNearbyMax) nearby.count = -1;
       }
+      nearby.at = q;
+      nearby.nearest_m = std::sqrt(best);
       if (!(best < threshold2)) continue;
       ++inliers;
       const Eigen::Vector2d diff = q - candidate_points_[static_cast<std::size_t>(found)];

@@ -284,7 +284,9 @@ class DynamicFilter {
   // RecurringRange). What such a beam returns well beyond that range moves with the robot.
   std::vector<RecurringRange> body_;
   std::vector<char> attached_;  // Scratch: per object of this scan, judged part of the robot.
-  std::vector<double> spacing_limit_;         // Scratch: per object, for free-space evidence.
+  std::vector<double> spacing_limit_;         // Scratch: per object, for free-space evidence,
+  std::vector<double> points_needed_;         // the points in free space that would mark it,
+  std::vector<std::int32_t> points_in_free_;  // and those found.
   std::vector<char> keep_;                    // Scratch: beams the map learns.
   std::optional<Pose2> previous_input_pose_;  // The pose given with the previous scan.
   std::uint64_t next_id_ = 1;

@@ -24,13 +24,16 @@ inline sim::ScanGeometry thesis_geometry() {
   return {-137.5 * kDeg, 275.0 * kDeg / 1616.0, 1617, 0.05F, 40.0F};
 }
 
-// A scripted scene: static walls and pillars, moving circles (people), a moving sensor.
+// A scripted scene: static walls and pillars, moving circles (people), a moving sensor; and
+// static things the scan plane reaches only at times (pieces: given the time and the sensor's
+// pose, the segments seen then, static in the truth).
 struct Mover {
   std::function<Eigen::Vector2d(double)> center;
   double radius_m;
 };
 struct Scenario {
   std::vector<sim::Segment> walls;
+  std::function<std::vector<sim::Segment>(double, const Pose2&)> pieces;
   std::vector<sim::Circle> pillars;
   std::vector<Mover> movers;
   std::function<Pose2(double)> sensor = [](double) { return Pose2{}; };
@@ -47,6 +50,9 @@ struct Frame {
 inline Frame render(const Scenario& s, double t) {
   sim::World world;
   world.segments = s.walls;
+  if (s.pieces) {
+    for (const sim::Segment& piece : s.pieces(t, s.sensor(t))) world.segments.push_back(piece);
+  }
   world.circles = s.pillars;
   for (const Mover& m : s.movers) world.circles.push_back({m.center(t), m.radius_m});
   Frame f;
@@ -54,7 +60,7 @@ inline Frame render(const Scenario& s, double t) {
   std::vector<std::int32_t> hit;
   f.scan = sim::raycast(world, f.pose, s.geometry, &hit);
   f.scan.stamp_s = t;
-  const auto first_mover = static_cast<std::int32_t>(s.walls.size() + s.pillars.size());
+  const auto first_mover = static_cast<std::int32_t>(world.segments.size() + s.pillars.size());
   f.truth.resize(hit.size());
   for (std::size_t i = 0; i < hit.size(); ++i) {
     f.truth[i] = hit[i] < 0 ? -1 : (hit[i] < first_mover ? 0 : hit[i] - first_mover + 1);

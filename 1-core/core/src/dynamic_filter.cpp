@@ -36,6 +36,13 @@ constexpr std::int32_t kFreeSpaceMaxAge = 10;
 // confirmed.
 constexpr double kFreeSpaceConfirm_m = 0.15;
 constexpr double kFreeSpaceDecision_s = 0.4;
+// An object at least kElongated_m long (a wall's piece, a cart's side; longer than a walker's
+// stride) shows its motion only across itself: the part of a surface a scanner sees changes as
+// the robot drives (a dropout, an occluder's edge) and its centroid slides along it. Along itself
+// only the motion of both its edges counts, when both are its outline then and now and they
+// moved alike (within kEdgesAgree_m).
+constexpr double kElongated_m = 0.8;
+constexpr double kEdgesAgree_m = 0.15;
 // Faster than this from where it appeared, the track has jumped to another object (a chair leg
 // next to it), which is no evidence of motion: refuted too.
 constexpr double kMaxWalkerSpeed_mps = 2.5;
@@ -571,7 +578,7 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
   }
   const double elapsed = stamp_s - track.marked_s;
   if (track.free_space_pending && elapsed >= kFreeSpaceDecision_s) {
-    const double moved = (obs.points[kCentroid] - track.marked_at).norm();
+    const double moved = moved_since_marked(track, obs);
     // Decided once, when the object has had time to move (see kFreeSpaceDecision_s): confirmed
     // when it has moved as a walker can, or it is beside a track that has; else refuted.
     track.free_space_pending = false;
@@ -620,6 +627,9 @@ void DynamicFilter::start_tracks(double stamp_s) {
       track.free_space_pending = from.free_space_pending;
       track.free_space_refuted = from.free_space_refuted;
       track.marked_at = from.marked_at;
+      track.marked_first = from.marked_first;
+      track.marked_last = from.marked_last;
+      track.marked_edges_trusted = from.marked_edges_trusted;
       track.marked_s = from.marked_s;
       track.age_scans = from.age_scans;
       for (PointVelocityFilter& kf : track.kf) kf.set_velocity(from.kf[kCentroid].velocity());
@@ -697,6 +707,9 @@ void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan,
     Track& t = tracks_[static_cast<std::size_t>(track_of_object_[i])];
     t.free_space_pending = true;
     t.marked_at = observations_[i].points[kCentroid];
+    t.marked_first = observations_[i].points[kFirst];
+    t.marked_last = observations_[i].points[kLast];
+    t.marked_edges_trusted = observations_[i].trusted[kFirst] && observations_[i].trusted[kLast];
     t.marked_s = scan.stamp_s;
     t.cls.object_class = ObjectClass::kDynamic;
     t.cls.dynamic_weight =
@@ -806,6 +819,23 @@ BeamLabel DynamicFilter::beam_label(const LaserScan& scan, std::size_t b,
 // Whether a dynamic track other than @p self, confirmed by its motion (not only by free space) and
 // seen in the last few scans, is within companion_distance_m of @p point_m: the other leg of a
 // walker whose planted foot has not moved while its free-space evidence was weighed.
+// How far a track marked by free space has moved since: its centroid's distance from where it
+// was, or for an elongated object its motion across itself and, when its edges show it, along.
+double DynamicFilter::moved_since_marked(const Track& track, const Observation& obs) {
+  const Eigen::Vector2d moved = obs.points[kCentroid] - track.marked_at;
+  const Eigen::Vector2d axis = obs.points[kLast] - obs.points[kFirst];
+  if (obs.extent_m < kElongated_m || !(axis.norm() > 0.0)) return moved.norm();
+  const Eigen::Vector2d along = axis.normalized();
+  const double across = moved.dot(Eigen::Vector2d(-along.y(), along.x()));
+  double lengthwise = 0.0;
+  if (track.marked_edges_trusted && obs.trusted[kFirst] && obs.trusted[kLast]) {
+    const double first = (obs.points[kFirst] - track.marked_first).dot(along);
+    const double last = (obs.points[kLast] - track.marked_last).dot(along);
+    if (std::abs(first - last) <= kEdgesAgree_m) lengthwise = 0.5 * (first + last);
+  }
+  return std::hypot(across, lengthwise);
+}
+
 bool DynamicFilter::beside_moving_track(const Track& self, const Eigen::Vector2d& point_m) const {
   const double limit = config_.tracking.companion_distance_m;
   if (!(limit > 0.0)) return false;

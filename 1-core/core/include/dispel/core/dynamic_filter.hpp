@@ -206,6 +206,10 @@ class DynamicFilter {
     bool free_space_pending = false;
     bool free_space_refuted = false;
     Eigen::Vector2d marked_at = Eigen::Vector2d::Zero();
+    // Its edges then, and whether both were its outline (see kElongated_m).
+    Eigen::Vector2d marked_first = Eigen::Vector2d::Zero();
+    Eigen::Vector2d marked_last = Eigen::Vector2d::Zero();
+    bool marked_edges_trusted = false;
     double marked_s = 0.0;
     bool attached = false;  // Judged part of the robot in the last scan it was seen.
   };
@@ -222,6 +226,7 @@ class DynamicFilter {
   void place_beams(const LaserScan& scan, const Pose2& sensor_pose);
   void observe(const Segmentation& segmentation, const Pose2& sensor_pose, float range_max_m);
   void explain(const LaserScan& scan, const Segmentation& segmentation);
+  static double moved_since_marked(const Track& track, const Observation& obs);
   bool beside_moving_track(const Track& self, const Eigen::Vector2d& point_m) const;
   void recur(const LaserScan& scan, const Segmentation& segmentation, const Pose2& sensor_pose,
              bool learn);

@@ -34,6 +34,8 @@ def set_keys(text, settings):
 
 def main():
     args = sys.argv[1:]
+    if len(args) < 3 or any(a.startswith('-') for a in args[:3]):
+        sys.exit(__doc__)
     dispel, scenario, config = args[0], args[1], args[2]
     seeds = int(args[args.index('--seeds') + 1]) if '--seeds' in args else 5
     settings = [args[i + 1] for i, a in enumerate(args) if a == '--set']

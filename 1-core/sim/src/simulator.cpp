@@ -192,10 +192,14 @@ void add_rough_wall(const Segment& wall, const RoughWalls& rw, std::mt19937_64& 
     if (rw.low_things_per_10m > 0.0 && u01(rng) < rw.low_things_per_10m * piece / 10.0) {
       const double side = u01(rng) < 0.5 ? -1.0 : 1.0;
       const double along = s + u01(rng) * piece;
-      const double radius = 0.075 + u01(rng) * 0.075;
+      const double radius = rw.low_things_min_radius_m +
+                            u01(rng) * (rw.low_things_max_radius_m - rw.low_things_min_radius_m);
       const double off =
           side * (radius + 0.05 + u01(rng) * 0.3);  // Against the wall, as furniture.
-      out.circles.push_back({at(along, off), radius, 0.8 + u01(rng) * 1.2});
+      out.circles.push_back(
+          {at(along, off), radius,
+           rw.low_things_min_seen_within_m +
+               u01(rng) * (rw.low_things_max_seen_within_m - rw.low_things_min_seen_within_m)});
     }
     s += piece;
   }
@@ -363,6 +367,16 @@ void Scenario::validate() const {
       reject("world.rough_walls.glass_share", w.glass_share, "in [0, 1)");
     if (!(w.low_things_per_10m >= 0.0 && w.low_things_per_10m <= 20.0))
       reject("world.rough_walls.low_things_per_10m", w.low_things_per_10m, "in [0, 20]");
+    // A pair [min, max]: the value named is min when it is the one out of bounds, else max.
+    const auto check_pair = [](const char* key, double min, double max, double limit,
+                               const char* rule) {
+      if (!(min > 0.0)) reject(key, min, rule);
+      if (!(max >= min && max <= limit)) reject(key, max, rule);
+    };
+    check_pair("world.rough_walls.low_things_radius_m", w.low_things_min_radius_m,
+               w.low_things_max_radius_m, 2.0, "0 < min <= max <= 2");
+    check_pair("world.rough_walls.low_things_seen_within_m", w.low_things_min_seen_within_m,
+               w.low_things_max_seen_within_m, 100.0, "0 < min <= max <= 100");
   }
   const Clutter& clutter = world.clutter;
   if (clutter.count < 0 || clutter.count > 100000)

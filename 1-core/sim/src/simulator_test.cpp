@@ -357,6 +357,52 @@ TEST(Simulator, LowThingsAreSeenOnlyFromNearby) {
   EXPECT_GT(wall, 200);
 }
 
+// Their size and the range they are hit from come from the scenario: larger things hit from
+// farther (what negative_2 showed), here 0.4-0.6 m across and hit from within 2.5-3 m. In a
+// corridor 6 m wide a thing's near side is 2.05-2.75 m from the robot on its axis: the default
+// (hit from within at most 2 m) would show none of them.
+TEST(Simulator, LowThingsTakeTheirSizeAndRangeFromTheScenario) {
+  Scenario s = room_with_walker();
+  s.actors.clear();
+  s.world.circles.clear();
+  s.duration_s = 0.5;
+  s.world.walls = {{{-10, -3.0}, {10, -3.0}}, {{-10, 3.0}, {10, 3.0}}};
+  RoughWalls rw;
+  rw.amplitude_m = 0.0;
+  rw.doors_per_10m = 0.0;
+  rw.legs_per_10m = 0.0;
+  rw.glass_share = 0.0;
+  rw.low_things_per_10m = 10.0;
+  rw.low_things_min_radius_m = 0.2;
+  rw.low_things_max_radius_m = 0.3;
+  rw.low_things_min_seen_within_m = 2.5;
+  rw.low_things_max_seen_within_m = 3.0;
+  s.world.rough_walls = rw;
+  const SimulationOutput out = simulate(s, 4);
+  const ScanFrame& f = out.scans[0];
+  const Pose2 laser = f.base_pose * s.robot.laser_mount;
+  int low = 0;
+  for (std::size_t i = 0; i < f.scan.size(); ++i) {
+    if (f.truth[i] == Truth::kNoReturn) continue;
+    const Eigen::Vector2d p = beam_point(f, laser, i);
+    if (std::abs(p.y()) < 2.94) {
+      ++low;
+      EXPECT_GT(f.scan.ranges_m[i], 2.0F) << "beam " << i;
+      EXPECT_LE(f.scan.ranges_m[i], 3.0F + 0.05F) << "beam " << i;
+    }
+  }
+  EXPECT_GT(low, 10);
+  s.world.rough_walls->low_things_max_seen_within_m = 2.0;  // Within 2 m: the default.
+  s.world.rough_walls->low_things_min_seen_within_m = 0.8;
+  const SimulationOutput near_only = simulate(s, 4);
+  const ScanFrame& g = near_only.scans[0];
+  for (std::size_t i = 0; i < g.scan.size(); ++i) {
+    if (g.truth[i] != Truth::kNoReturn) {
+      EXPECT_GE(std::abs(beam_point(g, laser, i).y()), 2.94) << "beam " << i;
+    }
+  }
+}
+
 TEST(Simulator, ClutterStandsClearOfEveryPathAndFlickers) {
   Scenario s = room_with_walker();  // A still robot at the origin, a walker along x = 2.
   s.duration_s = 1.0;
@@ -520,6 +566,18 @@ TEST(Scenario, BadValuesAreRejectedByName) {
   s.world.rough_walls = RoughWalls{};
   s.world.rough_walls->low_things_per_10m = -1.0;
   expect_named(s, "world.rough_walls.low_things_per_10m");
+  s.world.rough_walls = RoughWalls{};
+  s.world.rough_walls->low_things_min_radius_m = 0.0;
+  expect_named(s, "world.rough_walls.low_things_radius_m");
+  s.world.rough_walls = RoughWalls{};
+  s.world.rough_walls->low_things_max_radius_m = 0.05;  // Below the minimum, 0.075.
+  expect_named(s, "world.rough_walls.low_things_radius_m");
+  s.world.rough_walls = RoughWalls{};
+  s.world.rough_walls->low_things_max_seen_within_m = std::nan("");
+  expect_named(s, "world.rough_walls.low_things_seen_within_m");
+  s.world.rough_walls = RoughWalls{};
+  s.world.rough_walls->low_things_min_seen_within_m = -1.0;
+  expect_named(s, "world.rough_walls.low_things_seen_within_m");
   s = Scenario{};
   s.world.shelves = {ShelfRow{}};
   s.world.shelves[0].bay_m = 0.0;

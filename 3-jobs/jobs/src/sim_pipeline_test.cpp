@@ -30,7 +30,7 @@ std::string scenario_path(const std::string& name) {
 TEST(ScenarioYaml, ShippedScenariosLoadAndValidate) {
   for (const char* name :
        {"thesis_hall", "empty_hall", "busy_corridor", "warehouse_forklift", "office_corridors",
-        "warehouse_aisles", "office_corridors_slam", "cluttered_hall"}) {
+        "warehouse_aisles", "office_corridors_slam", "cluttered_hall", "office_revisits"}) {
     const sim::Scenario s = load_scenario(scenario_path(name));
     EXPECT_EQ(s.name, name);
   }
@@ -47,6 +47,16 @@ TEST(ScenarioYaml, ShippedScenariosLoadAndValidate) {
   EXPECT_EQ(clutter.max_radius_m, 0.15);
   EXPECT_EQ(clutter.return_share, 0.6);
   EXPECT_EQ(clutter.keep_clear_m, 1.0);
+  const sim::RoughWalls office =
+      *load_scenario(scenario_path("office_corridors")).world.rough_walls;
+  EXPECT_EQ(office.low_things_min_radius_m, 0.075);  // Defaults.
+  EXPECT_EQ(office.low_things_max_seen_within_m, 2.0);
+  const sim::RoughWalls revisits =
+      *load_scenario(scenario_path("office_revisits")).world.rough_walls;
+  EXPECT_EQ(revisits.low_things_min_radius_m, 0.2);
+  EXPECT_EQ(revisits.low_things_max_radius_m, 0.3);
+  EXPECT_EQ(revisits.low_things_min_seen_within_m, 2.0);
+  EXPECT_EQ(revisits.low_things_max_seen_within_m, 3.5);
 }
 
 TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
@@ -71,6 +81,10 @@ TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
   expect_error("world: {clutter: {count: 5, area: [0, 0, 1, 1], return_share: 2}}",
                "world.clutter.return_share must be");
   expect_error("world: {clutter: {cuont: 5}}", "unknown key 'world.clutter.cuont'");
+  expect_error("world: {rough_walls: {low_things_radius_m: [0.2]}}",
+               "world.rough_walls.low_things_radius_m must be a list of 2 numbers");
+  expect_error("world: {rough_walls: {low_things_seen_within_m: [3, 2]}}",
+               "world.rough_walls.low_things_seen_within_m must be");
   // Issue 16: NaN and infinite walls and noise were accepted.
   expect_error("world: {walls: [[0, 0, .nan, 1]]}",
                "world.walls[0][2] must be a finite number, got '.nan'");

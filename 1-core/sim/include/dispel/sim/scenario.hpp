@@ -33,11 +33,16 @@ struct RoughWalls {
   double doors_per_10m = 1.0;  ///< 0.9 m gaps with a 0.25 m deep recess.
   double legs_per_10m = 2.0;   ///< Pairs of furniture legs (2.5 cm radius) 0.15-0.6 m off the wall.
   double glass_share = 0.1;    ///< Share of pieces that return nothing.
-  /// Low things (chair seats, boxes: 0.15-0.3 m across, 0.05-0.35 m off the wall) that a scan plane
-  /// tilted up hits only from within 0.8-2 m (drawn per thing); from farther the beams pass over
-  /// them and see the wall behind. Real scan planes are not level: on a real robot (negative_2)
-  /// such things were most of what the filter removed.
+  /// Low things (chair seats, boxes: by default 0.15-0.3 m across, 0.05-0.35 m off the wall) that a
+  /// scan plane tilted up hits only from within a range (by default 0.8-2 m, drawn per thing); from
+  /// farther the beams pass over them and see the wall behind. Real scan planes are not level: on a
+  /// real robot (negative_2) such things were most of what the filter removed, some 0.5 m across
+  /// and hit from within about 3 m.
   double low_things_per_10m = 0.0;
+  double low_things_min_radius_m = 0.075;  ///< Radius drawn uniformly between these.
+  double low_things_max_radius_m = 0.15;
+  double low_things_min_seen_within_m = 0.8;  ///< Hit from within a range drawn between these.
+  double low_things_max_seen_within_m = 2.0;
 };
 
 /// A row of shelving (a warehouse rack): uprights every bay and, in each bay with probability

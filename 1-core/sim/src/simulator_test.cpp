@@ -10,6 +10,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 namespace dispel::sim {
 namespace {
@@ -556,28 +557,24 @@ TEST(Scenario, BadValuesAreRejectedByName) {
   s.robot.lawnmower = Lawnmower{};
   s.robot.lawnmower->lanes = 2147483647;
   expect_named(s, "robot.lawnmower.lanes");
-  s = Scenario{};
-  s.world.rough_walls = RoughWalls{};
-  s.world.rough_walls->piece_min_m = 0.0;
-  expect_named(s, "world.rough_walls.piece_min_m");
-  s.world.rough_walls = RoughWalls{};
-  s.world.rough_walls->glass_share = std::nan("");
-  expect_named(s, "world.rough_walls.glass_share");
-  s.world.rough_walls = RoughWalls{};
-  s.world.rough_walls->low_things_per_10m = -1.0;
-  expect_named(s, "world.rough_walls.low_things_per_10m");
-  s.world.rough_walls = RoughWalls{};
-  s.world.rough_walls->low_things_min_radius_m = 0.0;
-  expect_named(s, "world.rough_walls.low_things_radius_m");
-  s.world.rough_walls = RoughWalls{};
-  s.world.rough_walls->low_things_max_radius_m = 0.05;  // Below the minimum, 0.075.
-  expect_named(s, "world.rough_walls.low_things_radius_m");
-  s.world.rough_walls = RoughWalls{};
-  s.world.rough_walls->low_things_max_seen_within_m = std::nan("");
-  expect_named(s, "world.rough_walls.low_things_seen_within_m");
-  s.world.rough_walls = RoughWalls{};
-  s.world.rough_walls->low_things_min_seen_within_m = -1.0;
-  expect_named(s, "world.rough_walls.low_things_seen_within_m");
+  // Rough walls: one bad value at a time, each named by its key.
+  const std::tuple<double RoughWalls::*, double, const char*> rough_cases[] = {
+      {&RoughWalls::piece_min_m, 0.0, "world.rough_walls.piece_min_m"},
+      {&RoughWalls::glass_share, std::nan(""), "world.rough_walls.glass_share"},
+      {&RoughWalls::low_things_per_10m, -1.0, "world.rough_walls.low_things_per_10m"},
+      {&RoughWalls::low_things_min_radius_m, 0.0, "world.rough_walls.low_things_radius_m"},
+      // Below the minimum, 0.075.
+      {&RoughWalls::low_things_max_radius_m, 0.05, "world.rough_walls.low_things_radius_m"},
+      {&RoughWalls::low_things_max_seen_within_m, std::nan(""),
+       "world.rough_walls.low_things_seen_within_m"},
+      {&RoughWalls::low_things_min_seen_within_m, -1.0,
+       "world.rough_walls.low_things_seen_within_m"}};
+  for (const auto& [field, value, key] : rough_cases) {
+    s = Scenario{};
+    s.world.rough_walls = RoughWalls{};
+    (*s.world.rough_walls).*field = value;
+    expect_named(s, key);
+  }
   s = Scenario{};
   s.world.shelves = {ShelfRow{}};
   s.world.shelves[0].bay_m = 0.0;

@@ -106,11 +106,6 @@ void ScanRegistration::reset() {
   velocity_per_s_initialised_ = false;
 }
 
-ScanRegistration::Key ScanRegistration::key_at(std::int64_t ix, std::int64_t iy) {
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(ix)) << 32U) |
-         static_cast<std::uint32_t>(iy);
-}
-
 ScanRegistration::Key ScanRegistration::key_of(const Eigen::Vector2d& p) const {
   return key_at(static_cast<std::int64_t>(std::floor(p.x() / config_.voxel_size_m)),
                 static_cast<std::int64_t>(std::floor(p.y() / config_.voxel_size_m)));
@@ -241,52 +236,110 @@ Eigen::Vector2d ScanRegistration::normal_at(std::size_t b) const {
   return normal;
 }
 
-// The candidate map points of each sample point (at @p pose): the points of the voxels within
-// @p reach of its voxel (structure only, or all) that lie within @p radius of it; returns how many
-// sample points have one. The radius is the threshold plus the largest correction a registration
-// may make (max_correction_m): twice the threshold alone lost matches the registration needed
-// (a simulated warehouse seed kept 0.990 of its walls instead of 0.999).
-std::int32_t ScanRegistration::gather_candidates(const Pose2& pose, int reach, double radius,
-                                                 bool structure_only) {
-  candidate_begin_.assign(sample_.size() + 1, 0);
-  candidate_points_.clear();
-  candidate_normals_.clear();
-  const PoseTransform to_fixed(pose);
-  const double radius2 = radius * radius;
-  std::int32_t covered = 0;
-  // Consecutive sample points mostly fall in the same voxel: its neighbourhood is looked up once.
-  bool have_last = false;
-  std::int64_t last_ix = 0, last_iy = 0;
-  for (std::size_t i = 0; i < sample_.size(); ++i) {
-    candidate_begin_[i] = static_cast<std::int32_t>(candidate_points_.size());
-    const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
-    const auto ix = static_cast<std::int64_t>(std::floor(q.x() / config_.voxel_size_m));
-    const auto iy = static_cast<std::int64_t>(std::floor(q.y() / config_.voxel_size_m));
-    if (!have_last || ix != last_ix || iy != last_iy) {
-      neighbourhood_.clear();
-      for (std::int64_t x = ix - reach; x <= ix + reach; ++x) {
-        for (std::int64_t y = iy - reach; y <= iy + reach; ++y) {
-          const Voxel* v = map_.find(key_at(x, y));
-          if (v == nullptr || (structure_only && !structure(*v))) continue;
-          neighbourhood_.push_back(v);
+// The cache's miss (candidate_voxel()).
+const ScanRegistration::Voxel* ScanRegistration::look_up_candidate_voxel(Key key) {
+  CacheSlot& slot = cache_[static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ULL) >> kCacheShift)];
+  const Voxel* v = map_.find(key);
+  slot = {key, v != nullptr && (!structure_only_ || structure(*v)) ? v : nullptr,
+          cache_generation_};
+  return slot.voxel;
+}
+
+void ScanRegistration::forget_candidate_voxels() {
+  if (cache_.empty()) cache_.assign(std::size_t{1} << (64 - kCacheShift), CacheSlot{});
+  if (++cache_generation_ == 0) {  // Wrapped: no slot may look current.
+    std::fill(cache_.begin(), cache_.end(), CacheSlot{});
+    cache_generation_ = 1;
+  }
+}
+
+// Sample point i's candidates are the map points of the voxels within reach_ of its voxel at the
+// seed that lie within radius_ of it there (the registration moves a point by less than that).
+// Finds the nearest of them to @p q (of equals, the first in their order: voxels by x, then y,
+// then slot) and the ones within kNearby_m of q, its nearby list. Most points have a candidate
+// that near: only the voxels within kNearby_m of q are visited then. Otherwise (a nearest
+// farther away can still be a correspondence), or when @p need_any, the point's candidates are
+// listed once (candidates_) and walked whole from then on. Returns whether it has any candidate
+// (known only with @p need_any or when one was found). The radius is the threshold plus the
+// largest correction a registration may make (max_correction_m): twice the threshold alone lost
+// matches the registration needed (a simulated warehouse seed kept 0.990 of its walls instead of
+// 0.999).
+bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q, double threshold,
+                                         bool need_any, double& best, Reference& found) {
+  const Eigen::Vector2d& at_seed = seed_points_[i];
+  const double size = config_.voxel_size_m;
+  const auto sx = static_cast<std::int64_t>(std::floor(at_seed.x() / size));
+  const auto sy = static_cast<std::int64_t>(std::floor(at_seed.y() / size));
+  const double radius2 = radius_ * radius_;
+  const std::int64_t side = 2 * reach_ + 1;
+  Nearby& nearby = nearby_[i];
+  const auto take = [&](const Eigen::Vector2d& point, const Reference& r) {
+    const double d2 = (point - q).squaredNorm();
+    if (d2 < best || (d2 == best && r.order < found.order)) {
+      best = d2;
+      found = r;
+    }
+    if (d2 <= kNearby_m * kNearby_m) {
+      if (nearby.count <= kNearbyMax) nearby.near[static_cast<std::size_t>(nearby.count)] = r;
+      ++nearby.count;
+    }
+  };
+  const auto walk_list = [&]() {
+    nearby.origin = q;
+    nearby.count = 0;
+    for (std::int32_t k = listed_[i].begin; k < listed_[i].end; ++k) {
+      const Candidate& c = candidates_[static_cast<std::size_t>(k)];
+      take(c.point, c.reference);
+    }
+    if (nearby.count > kNearbyMax) nearby.count = -1;
+    return listed_[i].end > listed_[i].begin;
+  };
+  if (listed_[i].begin >= 0) return walk_list();
+  // The voxels within kNearby_m of q along each axis (a stored point may lie a float's rounding
+  // outside its voxel: a margin), within the seed's reach.
+  constexpr double kMargin_m = 1e-4;
+  const auto cell = [&](double v) { return static_cast<std::int64_t>(std::floor(v / size)); };
+  const std::int64_t x0 = std::max(sx - reach_, cell(q.x() - kNearby_m - kMargin_m));
+  const std::int64_t x1 = std::min(sx + reach_, cell(q.x() + kNearby_m + kMargin_m));
+  const std::int64_t y0 = std::max(sy - reach_, cell(q.y() - kNearby_m - kMargin_m));
+  const std::int64_t y1 = std::min(sy + reach_, cell(q.y() + kNearby_m + kMargin_m));
+  // Calls @p f(point, reference) for each candidate in the voxels [x0, x1] x [y0, y1].
+  const auto each_candidate = [&](std::int64_t x0, std::int64_t x1, std::int64_t y0,
+                                  std::int64_t y1, const auto& f) {
+    for (std::int64_t x = x0; x <= x1; ++x) {
+      for (std::int64_t y = y0; y <= y1; ++y) {
+        const Voxel* v = candidate_voxel(x, y);
+        if (v == nullptr) continue;
+        const auto order0 =
+            static_cast<std::int32_t>(((x - sx + reach_) * side + (y - sy + reach_)) * 4);
+        for (std::uint8_t j = 0; j < v->count; ++j) {
+          const Eigen::Vector2d point = v->points[j].cast<double>();
+          if ((point - at_seed).squaredNorm() <= radius2) f(point, Reference{v, j, order0 + j});
         }
       }
-      have_last = true;
-      last_ix = ix;
-      last_iy = iy;
     }
-    for (const Voxel* v : neighbourhood_) {
-      for (std::uint8_t j = 0; j < v->count; ++j) {
-        const Eigen::Vector2d point = v->points[j].cast<double>();
-        if ((point - q).squaredNorm() > radius2) continue;
-        candidate_points_.push_back(point);
-        candidate_normals_.push_back(v->normals[j].cast<double>());
-      }
-    }
-    if (static_cast<std::int32_t>(candidate_points_.size()) > candidate_begin_[i]) ++covered;
+  };
+  nearby.origin = q;
+  nearby.count = 0;
+  bool any = false;
+  each_candidate(x0, x1, y0, y1, [&](const Eigen::Vector2d& point, const Reference& r) {
+    any = true;
+    take(point, r);
+  });
+  if (best <= kNearby_m * kNearby_m || (threshold <= kNearby_m && !need_any)) {
+    if (nearby.count > kNearbyMax) nearby.count = -1;
+    return any;
   }
-  candidate_begin_[sample_.size()] = static_cast<std::int32_t>(candidate_points_.size());
-  return covered;
+  // All of its candidates, listed in their order.
+  listed_[i].begin = static_cast<std::int32_t>(candidates_.size());
+  each_candidate(sx - reach_, sx + reach_, sy - reach_, sy + reach_,
+                 [&](const Eigen::Vector2d& point, const Reference& r) {
+                   candidates_.push_back(Candidate{point, r});
+                 });
+  listed_[i].end = static_cast<std::int32_t>(candidates_.size());
+  best = kInfinity;
+  found = Reference{nullptr, 0, std::numeric_limits<std::int32_t>::max()};
+  return walk_list();
 }
 
 // Aligns the thinned scan with the map from @p seed (@p delta: the seed's motion since the
@@ -295,16 +348,23 @@ std::int32_t ScanRegistration::gather_candidates(const Pose2& pose, int reach, d
 Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double threshold,
                               RegistrationReport& report) {
   Pose2 pose = seed;
-  // Candidates: the points of the voxels around each sample point at the seed, gathered
-  // once (the registration moves a point by less than the threshold).
-  // A young map (the first scans, or a scene that has just changed) has no structure yet:
-  // then every voxel is a candidate.
-  const int reach = static_cast<int>(std::ceil(threshold / config_.voxel_size_m));
-  if (gather_candidates(seed, reach, threshold + config_.max_correction_m, true) <
-      config_.min_points) {
-    gather_candidates(seed, reach, threshold + config_.max_correction_m, false);
+  // Candidates: the points of the voxels around each sample point at the seed (see
+  // nearest_candidate()). A young map (the first scans, or a scene that has just changed) has
+  // no structure yet: when fewer than min_points sample points have a candidate in structure,
+  // every voxel is a candidate (the first iteration is done again).
+  reach_ = static_cast<int>(std::ceil(threshold / config_.voxel_size_m));
+  radius_ = threshold + config_.max_correction_m;
+  structure_only_ = true;
+  forget_candidate_voxels();
+  candidates_.clear();
+  listed_.assign(sample_.size(), Listed{});
+  seed_points_.resize(sample_.size());
+  {
+    const PoseTransform to_seed(seed);
+    for (std::size_t i = 0; i < sample_.size(); ++i) {
+      seed_points_[i] = to_seed(local_points_[static_cast<std::size_t>(sample_[i])]);
+    }
   }
-
   nearby_.resize(sample_.size());  // Each filled at the first iteration.
   const double kappa = threshold / 3.0;
   const double threshold2 = threshold * threshold;
@@ -318,48 +378,54 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
     sum_e2 = 0.0;
     const Eigen::Vector2d c = pose.translation();
     const PoseTransform to_fixed(pose);
+    std::int32_t covered = 0;
     for (std::size_t i = 0; i < sample_.size(); ++i) {
-      const Eigen::Vector2d q = to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
+      const Eigen::Vector2d q = iteration == 0
+                                    ? seed_points_[i]
+                                    : to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
       // The nearest candidate (the first of equals), used when within the threshold: from
       // the second iteration on, among the point's nearby candidates when they hold it;
       // among all of them otherwise, finding the nearby ones around where the point is now.
       Nearby& nearby = nearby_[i];
       double best = kInfinity;
-      std::int32_t found = -1;
-      const auto consider = [&](std::int32_t j) {
-        const double d2 = (candidate_points_[static_cast<std::size_t>(j)] - q).squaredNorm();
-        if (d2 < best) {
-          best = d2;
-          found = j;
-        }
-        return d2;
-      };
-      const std::int32_t begin = candidate_begin_[i], end = candidate_begin_[i + 1];
+      Reference found{nullptr, 0, std::numeric_limits<std::int32_t>::max()};
       if (iteration > 0 && nearby.count >= 0 &&
           nearby.nearest_m + (q - nearby.at).norm() + (q - nearby.origin).norm() +
                   kDistanceMargin_m <=
               kNearby_m) {
         for (std::int32_t k = 0; k < nearby.count; ++k) {
-          consider(nearby.index[static_cast<std::size_t>(k)]);
+          const Reference& r = nearby.near[static_cast<std::size_t>(k)];
+          const double d2 = (r.voxel->points[r.slot].cast<double>() - q).squaredNorm();
+          if (d2 < best || (d2 == best && r.order < found.order)) {
+            best = d2;
+            found = r;
+          }
         }
-      } else {
-        nearby.origin = q;
-        nearby.count = 0;
-        for (std::int32_t j = begin; j < end; ++j) {
-          const double d2 = consider(j);
-          // Without a branch: written at the count (the last slot takes the overflow),
-          // counted when near.
-          nearby.index[static_cast<std::size_t>(std::min(nearby.count, kNearbyMax))] = j;
-          nearby.count += d2 <= kNearby_m * kNearby_m ? 1 : 0;
-        }
-        if (nearby.count > kNearbyMax) nearby.count = -1;
+      } else if (nearest_candidate(i, q, threshold, iteration == 0 && structure_only_, best,
+                                   found)) {
+        ++covered;
       }
       nearby.at = q;
       nearby.nearest_m = std::sqrt(best);
+      if (iteration == 0 && structure_only_ && i + 1 == sample_.size() &&
+          covered < config_.min_points) {
+        // Too little structure: every voxel is a candidate; the first iteration again.
+        structure_only_ = false;
+        forget_candidate_voxels();
+        candidates_.clear();
+        listed_.assign(sample_.size(), Listed{});
+        h.setZero();
+        g.setZero();
+        inliers = 0;
+        sum_e2 = 0.0;
+        covered = 0;
+        i = static_cast<std::size_t>(-1);
+        continue;
+      }
       if (!(best < threshold2)) continue;
       ++inliers;
-      const Eigen::Vector2d diff = q - candidate_points_[static_cast<std::size_t>(found)];
-      Eigen::Vector2d normal = candidate_normals_[static_cast<std::size_t>(found)];
+      const Eigen::Vector2d diff = q - found.voxel->points[found.slot].cast<double>();
+      Eigen::Vector2d normal = found.voxel->normals[found.slot].cast<double>();
       if (normal.squaredNorm() < 0.25) {  // No normal: point to point along the difference.
         if (best < 1e-18) continue;
         normal = diff / std::sqrt(best);

@@ -148,10 +148,37 @@ class ScanRegistration {
     double last_stamp_s = 0.0;
   };
   using Key = std::uint64_t;
-  static Key key_at(std::int64_t ix, std::int64_t iy);
+  struct CacheSlot {  // A voxel looked up in generation (0: never), see candidate_voxel().
+    Key key = 0;
+    const Voxel* voxel = nullptr;
+    std::uint32_t generation = 0;
+  };
+  static constexpr unsigned kCacheShift = 52;  // 4096 slots.
+  static Key key_at(std::int64_t ix, std::int64_t iy) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(ix)) << 32U) |
+           static_cast<std::uint32_t>(iy);
+  }
   Key key_of(const Eigen::Vector2d& p) const;
   bool structure(const Voxel& v) const;
-  std::int32_t gather_candidates(const Pose2& pose, int reach, double radius, bool structure_only);
+  struct Reference {  // One map point: its voxel, its slot there, its place among candidates.
+    const Voxel* voxel;
+    std::uint8_t slot;
+    std::int32_t order;
+  };
+  // Voxel (x, y) of the map if it can hold candidates (structure only or all, structure_only_),
+  // else nullptr. The registration asks about the same voxels again and again: the answers are
+  // kept in a small direct-mapped cache for the alignment (cache_generation_).
+  const Voxel* candidate_voxel(std::int64_t x, std::int64_t y) {
+    const Key key = key_at(x, y);
+    const CacheSlot& slot =
+        cache_[static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ULL) >> kCacheShift)];
+    if (slot.generation == cache_generation_ && slot.key == key) return slot.voxel;
+    return look_up_candidate_voxel(key);
+  }
+  const Voxel* look_up_candidate_voxel(Key key);
+  void forget_candidate_voxels();
+  bool nearest_candidate(std::size_t i, const Eigen::Vector2d& q, double threshold, bool need_any,
+                         double& best, Reference& found);
   Pose2 align(const Pose2& seed, const Pose2& delta, double threshold, RegistrationReport& report);
   void thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s, bool deskew_wanted);
   Eigen::Vector2d normal_at(std::size_t b) const;
@@ -175,11 +202,24 @@ class ScanRegistration {
   std::vector<Eigen::Vector2d> world_points_;  // Per beam, in the fixed frame.
   BeamDirections directions_;                  // The scanner's beam directions.
   std::vector<std::int32_t> sample_;           // Beams used for registration.
-  // Candidate map points of each sampled point (gathered once per registration).
-  std::vector<std::int32_t> candidate_begin_;
-  std::vector<const Voxel*> neighbourhood_;  // Scratch: the voxels around a sample point.
-  std::vector<Eigen::Vector2d> candidate_points_;
-  std::vector<Eigen::Vector2d> candidate_normals_;
+  // The alignment's candidates (see nearest_candidate()): each sample point at the seed, the
+  // voxels around it, how far, and whether only structure counts.
+  std::vector<Eigen::Vector2d> seed_points_;
+  int reach_ = 0;
+  double radius_ = 0.0;
+  bool structure_only_ = true;
+  std::vector<CacheSlot> cache_;
+  struct Candidate {
+    Eigen::Vector2d point;
+    Reference reference;
+  };
+  struct Listed {  // A sample point's candidates in candidates_ (begin -1: not listed).
+    std::int32_t begin = -1;
+    std::int32_t end = -1;
+  };
+  std::vector<Candidate> candidates_;
+  std::vector<Listed> listed_;
+  std::uint32_t cache_generation_ = 0;
   // Each sample point's candidates within kNearby_m of where it was when all its candidates were
   // last looked at (in their order; count -1: more than fit), and its nearest candidate's
   // distance at the last iteration. While that distance plus how far the point moved since
@@ -191,7 +231,7 @@ class ScanRegistration {
     Eigen::Vector2d at;
     double nearest_m = 0.0;
     std::int32_t count = -1;
-    std::array<std::int32_t, kNearbyMax + 1> index{};
+    std::array<Reference, kNearbyMax + 1> near{};
   };
   std::vector<Nearby> nearby_;
   // explained(): the voxels that can explain points of one voxel, kept for the next beam.

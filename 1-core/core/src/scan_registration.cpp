@@ -354,10 +354,13 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
   // every voxel is a candidate (the first iteration is done again).
   reach_ = static_cast<int>(std::ceil(threshold / config_.voxel_size_m));
   radius_ = threshold + config_.max_correction_m;
-  structure_only_ = true;
-  forget_candidate_voxels();
-  candidates_.clear();
-  listed_.assign(sample_.size(), Listed{});
+  const auto start_candidates = [&](bool structure_only) {
+    structure_only_ = structure_only;
+    forget_candidate_voxels();
+    candidates_.clear();
+    listed_.assign(sample_.size(), Listed{});
+  };
+  start_candidates(true);
   seed_points_.resize(sample_.size());
   {
     const PoseTransform to_seed(seed);
@@ -407,21 +410,6 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
       }
       nearby.at = q;
       nearby.nearest_m = std::sqrt(best);
-      if (iteration == 0 && structure_only_ && i + 1 == sample_.size() &&
-          covered < config_.min_points) {
-        // Too little structure: every voxel is a candidate; the first iteration again.
-        structure_only_ = false;
-        forget_candidate_voxels();
-        candidates_.clear();
-        listed_.assign(sample_.size(), Listed{});
-        h.setZero();
-        g.setZero();
-        inliers = 0;
-        sum_e2 = 0.0;
-        covered = 0;
-        i = static_cast<std::size_t>(-1);
-        continue;
-      }
       if (!(best < threshold2)) continue;
       ++inliers;
       const Eigen::Vector2d diff = q - found.voxel->points[found.slot].cast<double>();
@@ -436,6 +424,12 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
       h.noalias() += w * j * j.transpose();
       g.noalias() += w * e * j;
       sum_e2 += e * e;
+    }
+    if (iteration == 0 && structure_only_ && covered < config_.min_points) {
+      // Too little structure: every voxel is a candidate; the first iteration again.
+      start_candidates(false);
+      --iteration;
+      continue;
     }
     h_data = h;
     if (inliers < config_.min_points) break;

@@ -299,10 +299,10 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
   // outside its voxel: a margin), within the seed's reach.
   constexpr double kMargin_m = 1e-4;
   const auto cell = [&](double v) { return static_cast<std::int64_t>(std::floor(v / size)); };
-  const std::int64_t x0 = std::max(sx - reach_, cell(q.x() - kNearby_m - kMargin_m));
-  const std::int64_t x1 = std::min(sx + reach_, cell(q.x() + kNearby_m + kMargin_m));
-  const std::int64_t y0 = std::max(sy - reach_, cell(q.y() - kNearby_m - kMargin_m));
-  const std::int64_t y1 = std::min(sy + reach_, cell(q.y() + kNearby_m + kMargin_m));
+  const std::int64_t near_x0 = std::max(sx - reach_, cell(q.x() - kNearby_m - kMargin_m));
+  const std::int64_t near_x1 = std::min(sx + reach_, cell(q.x() + kNearby_m + kMargin_m));
+  const std::int64_t near_y0 = std::max(sy - reach_, cell(q.y() - kNearby_m - kMargin_m));
+  const std::int64_t near_y1 = std::min(sy + reach_, cell(q.y() + kNearby_m + kMargin_m));
   // Calls @p f(point, reference) for each candidate in the voxels [x0, x1] x [y0, y1].
   const auto each_candidate = [&](std::int64_t x0, std::int64_t x1, std::int64_t y0,
                                   std::int64_t y1, const auto& f) {
@@ -322,10 +322,11 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
   nearby.origin = q;
   nearby.count = 0;
   bool any = false;
-  each_candidate(x0, x1, y0, y1, [&](const Eigen::Vector2d& point, const Reference& r) {
-    any = true;
-    take(point, r);
-  });
+  each_candidate(near_x0, near_x1, near_y0, near_y1,
+                 [&](const Eigen::Vector2d& point, const Reference& r) {
+                   any = true;
+                   take(point, r);
+                 });
   if (best <= kNearby_m * kNearby_m || (threshold <= kNearby_m && !need_any)) {
     if (nearby.count > kNearbyMax) nearby.count = -1;
     return any;

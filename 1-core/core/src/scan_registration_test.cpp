@@ -106,13 +106,14 @@ Errors run(const sim::SimulationOutput& out, const sim::Scenario& s, bool with_o
 
 // The registration on the simulator, 100 s around the office loop (100 m at 1 m/s). The issue's
 // targets: relative pose error over 1 s below 1 cm and 0.2 degrees, less drift than the wheel
-// odometry's, laser-only within twice the odometry-seeded error. Measured seeded: 1.6 cm and
-// 0.11 degrees over 1 s, 0.09 m after 100 m (wheel odometry: 13.2 m): the 1 cm target is not
+// odometry's, laser-only within twice the odometry-seeded error. Measured seeded: 1.2 cm and
+// 0.10 degrees over 1 s, 0.05 m after 100 m (wheel odometry: 13.2 m): the 1 cm target is not
 // reached; the error is along the corridors (docs/results.md, "Registration"). Laser-only: 4.0 cm
 // and 0.61 degrees over 1 s (not within twice the seeded error: its scans are not de-skewed),
-// 0.12 m after 100 m. (With the odometry's last sample before each scan instead of its value at
-// the scan's stamp: 1.6 cm, 0.12 degrees, 0.007 m; before the simulated robot rounded its
-// corners: 1.7 cm, 0.17 degrees, 0.03 m; laser-only 6.4 cm, 0.61 degrees, 0.05 m.)
+// 0.12 m after 100 m. (Seeded, before the map's own normals for far walls: 1.6 cm, 0.11 degrees,
+// 0.09 m; with the odometry's last sample before each scan instead of its value at the scan's
+// stamp: 1.6 cm, 0.12 degrees, 0.007 m; before the simulated robot rounded its corners: 1.7 cm,
+// 0.17 degrees, 0.03 m; laser-only 6.4 cm, 0.61 degrees, 0.05 m.)
 TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
   const sim::Scenario s = office_loop(100.0);
   const sim::SimulationOutput out = sim::simulate(s, 1);
@@ -125,7 +126,7 @@ TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
       ((o0.inverse() * o1).translation() - (t0.inverse() * t1).translation()).norm();
   const auto scans = static_cast<int>(out.scans.size());
   EXPECT_GE(seeded.registered, scans - scans / 50);
-  EXPECT_LT(seeded.relative_1s_m, 0.02);
+  EXPECT_LT(seeded.relative_1s_m, 0.014);  // 0.0163 m with every far wall point to point.
   EXPECT_LT(seeded.relative_1s_rad, 0.25 * kDeg);
   EXPECT_LT(seeded.final_m, 0.1 * odometry_final_m);
   // Laser-only, the same loop: measured 4.0 cm and 0.61 degrees over 1 s, 0.12 m after 100 m.
@@ -200,9 +201,10 @@ TEST(ScanRegistration, AWheelThatSlipsDoesNotTurnTheMap) {
 }
 
 // A corridor with nothing ahead: the scans say nothing about the motion along it. The
-// registration holds the seed along it instead of sliding. (Its degeneracy measure does not yet
-// flag such scans: the noisy normals of far, grazing returns give information along the
-// corridor; reported, not asserted.)
+// registration holds the seed along it instead of sliding, and its degeneracy measure flags such
+// scans: 20 of 46 measured. It flagged none while the far walls, seen at grazing angles and
+// without normals from their scans, were matched point to point: those matches gave information
+// along the corridor that the walls do not have (the map's own normals for them, map_normal()).
 TEST(ScanRegistration, ACorridorWithNothingAheadKeepsTheSeedAlongIt) {
   sim::Scenario s = office_loop(6.0);
   s.world.walls = {{{-50, -1.1}, {50, -1.1}}, {{-50, 1.1}, {50, 1.1}}};
@@ -224,6 +226,7 @@ TEST(ScanRegistration, ACorridorWithNothingAheadKeepsTheSeedAlongIt) {
     EXPECT_LT((p.translation() - seed.translation()).norm(), 0.1) << f.scan.stamp_s;
   }
   EXPECT_GT(registered, 30);
+  EXPECT_GE(degenerate, registered / 4);
   std::printf("%d of %d registered scans degenerate\n", degenerate, registered);
 }
 

@@ -141,6 +141,9 @@ class ScanRegistration {
     std::array<Eigen::Vector2f, 4> normals{kZero, kZero, kZero, kZero};
     std::array<double, 4> stamps_s{};  // When each point was added.
     std::uint8_t count = 0;
+    // Per slot (bit): a normal was sought among the map's points (map_normal()), and found.
+    std::uint8_t map_normal_sought = 0;
+    std::uint8_t map_normal_found = 0;
     std::int32_t scans = 0;       // Scans that hit it.
     bool in_free_space = false;   // First hit where the scanner had seen through.
     std::uint32_t last_scan = 0;  // The last one.
@@ -182,6 +185,7 @@ class ScanRegistration {
   Pose2 align(const Pose2& seed, const Pose2& delta, double threshold, RegistrationReport& report);
   void thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s, bool deskew_wanted);
   Eigen::Vector2d normal_at(std::size_t b) const;
+  Eigen::Vector2d map_normal(const Voxel& voxel, std::uint8_t slot);
 
   RegistrationConfig config_;
   IntegerKeyMap<Voxel> map_;
@@ -202,6 +206,7 @@ class ScanRegistration {
   std::vector<Eigen::Vector2d> world_points_;  // Per beam, in the fixed frame.
   BeamDirections directions_;                  // The scanner's beam directions.
   std::vector<std::int32_t> sample_;           // Beams used for registration.
+  bool map_normals_ = false;  // The scan has odometry: map points get map_normal() (see align()).
   // The alignment's candidates (see nearest_candidate()): each sample point at the seed, the
   // voxels around it, how far, and whether only structure counts.
   std::vector<Eigen::Vector2d> seed_points_;

@@ -162,6 +162,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
     counters_.registration_degenerate += out.registration.degenerate ? 1 : 0;
     counters_.scans_without_odometry += sensor_pose ? 0 : 1;
     counters_.odometry_overruled += out.registration.odometry_overruled ? 1 : 0;
+    counters_.scans_realigned += out.registration.realignments > 0 ? 1 : 0;
   }
   out.sensor_pose = pose;
   previous_input_pose_ = sensor_pose;

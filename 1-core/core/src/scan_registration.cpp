@@ -37,6 +37,11 @@ constexpr double kMinMotionForThreshold_m = 0.02;
 constexpr double kSeedsApart_rad = 0.05;
 constexpr double kSeedsApart_m = 0.15;
 constexpr double kBetterShare = 0.2;
+// A scan de-skewed by a turn that bends its sweep this much (at kThresholdRange_m) against the
+// registered turn is de-skewed and aligned again, at most kMaxRealignments times
+// (register_scan()).
+constexpr double kRebend_m = 0.04;
+constexpr int kMaxRealignments = 4;
 // Voxels hit by fewer scans than structure needs are forgotten when unseen this long (the trail
 // of someone walking by).
 constexpr double kTransientMemory_s = 2.0;
@@ -182,8 +187,8 @@ Eigen::Vector2d line_normal(Eigen::Vector2d sum, const Eigen::Matrix2d& sum_oute
 
 // Beam points in the sensor frame at the scan's stamp: each beam moved back by the sensor's
 // motion between the stamp and its own time (time_increment); the sample for the registration
-// thinned to scan_spacing_m.
-void ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s,
+// thinned to scan_spacing_m. Returns whether the beams were de-skewed.
+bool ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s,
                                        bool deskew_wanted) {
   const std::size_t n = scan.size();
   const std::vector<Eigen::Vector2d>& unit = directions_.of(scan);
@@ -223,6 +228,7 @@ void ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motio
     sample_.push_back(static_cast<std::int32_t>(b));
     last = p;
   }
+  return deskew;
 }
 
 // The normal of beam b's surface in the sensor frame: the direction of least spread of the
@@ -399,10 +405,11 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
 }
 
 // Aligns the thinned scan with the map from @p seed (@p delta: the seed's motion since the
-// previous scan; report.seeded_by_odometry: whose noise the seed has). Fills the report's
-// alignment fields and returns the registered pose, or @p seed with report.fallback set.
+// previous scan; @p noise: whose noise the seed has; report.seeded_by_odometry: whether there is
+// odometry to fall back on). Fills the report's alignment fields and returns the registered
+// pose, or @p seed with report.fallback set.
 Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double threshold,
-                              RegistrationReport& report) {
+                              SeedNoise noise, RegistrationReport& report) {
   Pose2 pose = seed;
   // Candidates: the points of the voxels around each sample point at the seed (see
   // nearest_candidate()). A young map (the first scans, or a scene that has just changed) has
@@ -508,11 +515,11 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
     g /= config_.range_noise_m * config_.range_noise_m;
     // The odometry's noise grows with the motion (5 % of it, and 0.01 rad per metre).
     const double moved = delta.translation().norm(), turned = std::abs(delta.yaw_rad);
-    const double sigma_t = report.seeded_by_odometry ? config_.odometry_noise_m + 0.05 * moved
-                                                     : config_.constant_velocity_noise_m;
-    const double sigma_r = report.seeded_by_odometry
-                               ? config_.odometry_noise_rad + 0.05 * turned + 0.01 * moved
-                               : config_.constant_velocity_noise_rad;
+    const bool odometry = noise == SeedNoise::kOdometry;
+    const double sigma_t =
+        odometry ? config_.odometry_noise_m + 0.05 * moved : config_.constant_velocity_noise_m;
+    const double sigma_r = odometry ? config_.odometry_noise_rad + 0.05 * turned + 0.01 * moved
+                                    : config_.constant_velocity_noise_rad;
     const double prior_t = 1.0 / (sigma_t * sigma_t);
     const double prior_r = 1.0 / (sigma_r * sigma_r);
     const Eigen::Vector3d off(pose.x_m - seed.x_m, pose.y_m - seed.y_m,
@@ -596,13 +603,17 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
     if (report.points < config_.min_points) {
       report.fallback = true;
     } else {
-      pose = align(seed, delta, threshold, report);
+      const SeedNoise noise = report.seeded_by_odometry ? SeedNoise::kOdometry : SeedNoise::kGuess;
+      pose = align(seed, delta, threshold, noise, report);
+      Pose2 deskewed_per_s = motion_per_s;  // The motion the scan is de-skewed with.
+      Pose2 used_seed = seed;
       // A wheel that slips turns the odometry by degrees within a scan, farther than the
       // registration's reach from the seed: the scan then registers poorly or not at all, and
       // the map goes on from a pose rotated by the slip. When the odometry's motion and the
       // constant-velocity guess (the registered motion of the scans before) part by more than a
-      // robot's motors can change within a scan, the guess is tried too, and the alignment that
-      // matched more of the scan is kept.
+      // robot's motors can change within a scan, the guess is tried too, on the scan de-skewed
+      // by the guess (the odometry's motion is what is in doubt), and the alignment that matched
+      // more of the scan is kept.
       if (report.seeded_by_odometry && velocity_per_s_initialised_ && dt > 0.0) {
         const Pose2 guess_delta = scaled(velocity_per_s_, dt);
         const Pose2 apart = delta.inverse() * guess_delta;
@@ -611,15 +622,50 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
           RegistrationReport guessed = report;
           guessed.seeded_by_odometry = false;
           guessed.registered = guessed.fallback = guessed.degenerate = false;
-          const Pose2 from_guess =
-              align(previous_pose_ * guess_delta, guess_delta, threshold, guessed);
+          const bool deskewed = thin_and_deskew(scan, velocity_per_s_, true);
+          const Pose2 from_guess = align(previous_pose_ * guess_delta, guess_delta, threshold,
+                                         SeedNoise::kGuess, guessed);
           if (guessed.registered &&
               guessed.inlier_share * guessed.points >= config_.min_points_with_odometry &&
               (!report.registered || guessed.inlier_share > report.inlier_share + kBetterShare)) {
             guessed.odometry_overruled = true;
             report = guessed;
             pose = from_guess;
+            deskewed_per_s = velocity_per_s_;
+            used_seed = previous_pose_ * guess_delta;
+          } else if (deskewed) {
+            thin_and_deskew(scan, motion_per_s, true);
           }
+        }
+      }
+      // The scan was de-skewed by a turn that the registration then found wrong (a slip starts or
+      // ends within the odometry's motion since the previous scan): when the difference bends
+      // the sweep by more than kRebend_m at kThresholdRange_m, the scan is de-skewed again by the
+      // registered turn and aligned again from the registered pose, which the odometry no longer
+      // holds (constant-velocity noise); up to kMaxRealignments times, as each alignment of a
+      // bent scan is itself a little off.
+      if (odometry_pose && dt > 0.0) {
+        const double sweep_s = scan.time_increment_s * static_cast<double>(scan.size());
+        for (int again = 0; again < kMaxRealignments && report.registered; ++again) {
+          const Pose2 moved = previous_pose_.inverse() * pose;
+          const double turn_per_s = moved.yaw_rad / dt;
+          const double bend_m =
+              std::abs(turn_per_s - deskewed_per_s.yaw_rad) * sweep_s * kThresholdRange_m;
+          if (!(bend_m > kRebend_m)) break;
+          const Pose2 turned{deskewed_per_s.x_m, deskewed_per_s.y_m, turn_per_s};
+          if (!thin_and_deskew(scan, turned, true)) break;
+          RegistrationReport realigned = report;
+          realigned.registered = realigned.fallback = realigned.degenerate = false;
+          const Pose2 p = align(pose, moved, threshold, SeedNoise::kGuess, realigned);
+          if (!realigned.registered) {
+            thin_and_deskew(scan, deskewed_per_s, true);
+            break;
+          }
+          realigned.correction = used_seed.inverse() * p;
+          ++realigned.realignments;
+          report = realigned;
+          pose = p;
+          deskewed_per_s = turned;
         }
       }
       if (report.registered &&

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <string>
 
 #include "dispel/core/pose_buffer.hpp"
 #include "dispel/sim/simulator.hpp"
@@ -47,6 +49,7 @@ struct Errors {
   double relative_1s_rad = 0.0;
   double along_1s_m = 0.0;       // Its part along the true motion over the window (RMS),
   double across_1s_m = 0.0;      // and across it.
+  double max_1s_rad = 0.0;       // The largest over all 1 s windows.
   double relative_scan_m = 0.0;  // RMS over windows of one scan.
   double final_m = 0.0;          // Position error at the end.
   int registered = 0;
@@ -84,6 +87,7 @@ Errors run(const sim::SimulationOutput& out, const sim::Scenario& s, bool with_o
     const Pose2 err = dt.inverse() * de;
     sum_m += err.translation().squaredNorm();
     sum_rad += err.yaw_rad * err.yaw_rad;
+    e.max_1s_rad = std::max(e.max_1s_rad, std::abs(err.yaw_rad));
     // Along the true motion, in the frame of the window's start.
     const Eigen::Vector2d moved = dt.translation();
     const Eigen::Vector2d off = de.translation() - moved;
@@ -106,38 +110,67 @@ Errors run(const sim::SimulationOutput& out, const sim::Scenario& s, bool with_o
 
 // The registration on the simulator, 100 s around the office loop (100 m at 1 m/s). The issue's
 // targets: relative pose error over 1 s below 1 cm and 0.2 degrees, less drift than the wheel
-// odometry's, laser-only within twice the odometry-seeded error. Measured seeded: 1.2 cm and
-// 0.10 degrees over 1 s, 0.05 m after 100 m (wheel odometry: 13.2 m): the 1 cm target is not
-// reached; the error is along the corridors (docs/results.md, "Registration"). Laser-only: 4.0 cm
-// and 0.61 degrees over 1 s (not within twice the seeded error: its scans are not de-skewed),
-// 0.12 m after 100 m. (Seeded, before the map's own normals for far walls: 1.6 cm, 0.11 degrees,
-// 0.09 m; with the odometry's last sample before each scan instead of its value at the scan's
-// stamp: 1.6 cm, 0.12 degrees, 0.007 m; before the simulated robot rounded its corners: 1.7 cm,
-// 0.17 degrees, 0.03 m; laser-only 6.4 cm, 0.61 degrees, 0.05 m.)
+// odometry's, laser-only within twice the odometry-seeded error. Measured on seed 1, seeded: 1.2
+// cm and 0.10 degrees over 1 s, 0.05 m after 100 m (wheel odometry: 13.2 m). Seed 1 is the
+// luckiest of eight: over seeds 1-8 (DISPEL_REGISTRATION_SEEDS=8) 1.43 cm (1.17-2.01) and 0.110
+// degrees (0.100-0.153), laser-only 7.1 cm (3.7-12.6) and 0.61 degrees, 5.0 times the seeded
+// error. The 1 cm target is not reached; the error is along the corridors (docs/results.md,
+// "Registration"). Laser-only on seed 1: 4.0 cm and 0.61 degrees over 1 s (its scans are not
+// de-skewed), 0.12 m after 100 m. (Seeded, before the map's own normals for far walls: 1.6 cm, 0.11
+// degrees, 0.09 m; with the odometry's last sample before each scan instead of its value at the
+// scan's stamp: 1.6 cm, 0.12 degrees, 0.007 m; before the simulated robot rounded its corners: 1.7
+// cm, 0.17 degrees, 0.03 m; laser-only 6.4 cm, 0.61 degrees, 0.05 m.)
 TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
+  // DISPEL_REGISTRATION_SEEDS=N runs seeds 1 to N (docs/results.md: seed 1 alone is not the
+  // registration's error) and prints each seed's figures and their means; CI runs seed 1.
+  const char* seeds_env = std::getenv("DISPEL_REGISTRATION_SEEDS");
+  const int seeds = seeds_env != nullptr ? std::max(1, std::atoi(seeds_env)) : 1;
   const sim::Scenario s = office_loop(100.0);
-  const sim::SimulationOutput out = sim::simulate(s, 1);
-  const Errors seeded = run(out, s, true);
-  const Errors laser_only_loop = run(out, s, false);
-  // The wheel odometry's own drift over the same path.
-  const Pose2 o0 = out.sensors.front().odom_pose, o1 = out.sensors.back().odom_pose;
-  const Pose2 t0 = out.sensors.front().true_pose, t1 = out.sensors.back().true_pose;
-  const double odometry_final_m =
-      ((o0.inverse() * o1).translation() - (t0.inverse() * t1).translation()).norm();
-  const auto scans = static_cast<int>(out.scans.size());
-  EXPECT_GE(seeded.registered, scans - scans / 50);
-  EXPECT_LT(seeded.relative_1s_m, 0.014);  // 0.0163 m with every far wall point to point.
-  EXPECT_LT(seeded.relative_1s_rad, 0.25 * kDeg);
-  EXPECT_LT(seeded.final_m, 0.1 * odometry_final_m);
-  // Laser-only, the same loop: measured 4.0 cm and 0.61 degrees over 1 s, 0.12 m after 100 m.
-  // It ran away along the first corridor (37 m off after 100 m) while its scans were de-skewed
-  // by the guessed motion, and oscillated and diverged while the guess was the last scan's motion
-  // alone (2.8 m over 1 s in the first 20 s); with either, these bounds fail. With room for
-  // another build's rounding (with 0.3 or 0.7 for velocity_smoothing: 6 cm, 0.4-0.7 m).
-  EXPECT_GE(laser_only_loop.registered, scans - scans / 50);
-  EXPECT_LT(laser_only_loop.relative_1s_m, 0.15);
-  EXPECT_LT(laser_only_loop.relative_1s_rad, 1.0 * kDeg);
-  EXPECT_LT(laser_only_loop.final_m, 0.2 * odometry_final_m);
+  double sum_seeded_m = 0.0, sum_seeded_rad = 0.0, sum_laser_only_m = 0.0, sum_laser_only_rad = 0.0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    const sim::SimulationOutput out = sim::simulate(s, static_cast<std::uint64_t>(seed));
+    const Errors seeded = run(out, s, true);
+    const Errors laser_only_loop = run(out, s, false);
+    // The wheel odometry's own drift over the same path.
+    const Pose2 o0 = out.sensors.front().odom_pose, o1 = out.sensors.back().odom_pose;
+    const Pose2 t0 = out.sensors.front().true_pose, t1 = out.sensors.back().true_pose;
+    const double odometry_final_m =
+        ((o0.inverse() * o1).translation() - (t0.inverse() * t1).translation()).norm();
+    const auto scans = static_cast<int>(out.scans.size());
+    EXPECT_GE(seeded.registered, scans - scans / 50) << seed;
+    // Seed 1: 0.0163 m with every far wall point to point; seeds 1-8 1.1-1.5 cm (docs/results.md).
+    EXPECT_LT(seeded.relative_1s_m, seed == 1 ? 0.014 : 0.025) << seed;
+    // 0.28 degrees on seed 3 while a slip bent the scans (AScanDeSkewedByASlippingWheelIsBentBack).
+    EXPECT_LT(seeded.relative_1s_rad, 0.2 * kDeg) << seed;
+    EXPECT_LT(seeded.final_m, 0.1 * odometry_final_m) << seed;
+    // Laser-only: it ran away along the first corridor (37 m off after 100 m) while its scans
+    // were de-skewed by the guessed motion, and oscillated and diverged while the guess was the
+    // last scan's motion alone (2.8 m over 1 s in the first 20 s); with either, these bounds
+    // fail. With room for another build's rounding (with 0.3 or 0.7 for velocity_smoothing: 6 cm,
+    // 0.4-0.7 m).
+    EXPECT_GE(laser_only_loop.registered, scans - scans / 50) << seed;
+    EXPECT_LT(laser_only_loop.relative_1s_m, 0.15) << seed;
+    EXPECT_LT(laser_only_loop.relative_1s_rad, 1.0 * kDeg) << seed;
+    EXPECT_LT(laser_only_loop.final_m, 0.2 * odometry_final_m) << seed;
+    std::printf(
+        "seed %d, loop, relative 1 s: seeded %.4f m %.3f deg (along the motion %.4f m, across "
+        "%.4f m; one scan %.4f m; at most %.3f deg), laser-only %.4f m %.3f deg (along %.4f m, "
+        "across %.4f m); after %.0f s seeded %.3f m, laser-only %.3f m, wheel odometry %.3f m\n",
+        seed, seeded.relative_1s_m, seeded.relative_1s_rad / kDeg, seeded.along_1s_m,
+        seeded.across_1s_m, seeded.relative_scan_m, seeded.max_1s_rad / kDeg,
+        laser_only_loop.relative_1s_m, laser_only_loop.relative_1s_rad / kDeg,
+        laser_only_loop.along_1s_m, laser_only_loop.across_1s_m, s.duration_s, seeded.final_m,
+        laser_only_loop.final_m, odometry_final_m);
+    sum_seeded_m += seeded.relative_1s_m;
+    sum_seeded_rad += seeded.relative_1s_rad;
+    sum_laser_only_m += laser_only_loop.relative_1s_m;
+    sum_laser_only_rad += laser_only_loop.relative_1s_rad;
+  }
+  std::printf(
+      "mean of %d seeds, relative 1 s: seeded %.4f m %.3f deg, laser-only %.4f m %.3f deg "
+      "(%.1f x)\n",
+      seeds, sum_seeded_m / seeds, sum_seeded_rad / seeds / kDeg, sum_laser_only_m / seeds,
+      sum_laser_only_rad / seeds / kDeg, sum_laser_only_m / sum_seeded_m);
 
   const sim::Scenario straight = office_loop(20.0);
   const sim::SimulationOutput first = sim::simulate(straight, 1);
@@ -146,16 +179,11 @@ TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
   EXPECT_GE(seeded_straight.registered, static_cast<int>(first.scans.size()) - 5);
   EXPECT_LT(laser_only.relative_1s_m, 0.15);
   std::printf(
-      "loop, relative 1 s: seeded %.4f m %.3f deg (along the motion %.4f m, across %.4f m; one "
-      "scan %.4f m), laser-only %.4f m %.3f deg (along %.4f m, across %.4f m); after %.0f s "
-      "seeded %.3f m, laser-only %.3f m, wheel odometry %.3f m. First 20 s: seeded %.4f m %.3f "
-      "deg, laser-only %.4f m %.3f deg, end %.3f / %.3f m\n",
-      seeded.relative_1s_m, seeded.relative_1s_rad / kDeg, seeded.along_1s_m, seeded.across_1s_m,
-      seeded.relative_scan_m, laser_only_loop.relative_1s_m, laser_only_loop.relative_1s_rad / kDeg,
-      laser_only_loop.along_1s_m, laser_only_loop.across_1s_m, s.duration_s, seeded.final_m,
-      laser_only_loop.final_m, odometry_final_m, seeded_straight.relative_1s_m,
-      seeded_straight.relative_1s_rad / kDeg, laser_only.relative_1s_m,
-      laser_only.relative_1s_rad / kDeg, seeded_straight.final_m, laser_only.final_m);
+      "First 20 s, seed 1: seeded %.4f m %.3f deg, laser-only %.4f m %.3f deg, end %.3f / %.3f "
+      "m\n",
+      seeded_straight.relative_1s_m, seeded_straight.relative_1s_rad / kDeg,
+      laser_only.relative_1s_m, laser_only.relative_1s_rad / kDeg, seeded_straight.final_m,
+      laser_only.final_m);
 }
 
 // A wheel that slips: the odometry turns 10 degrees in each of four scans (40 degrees in half a
@@ -198,6 +226,29 @@ TEST(ScanRegistration, AWheelThatSlipsDoesNotTurnTheMap) {
   EXPECT_LT((moved_estimate.translation() - moved_truth.translation()).norm(), 0.3);
   const Pose2 odometry_moved = Pose2{}.inverse() * slipped;  // The odometry starts at the origin.
   EXPECT_GT(std::abs(wrap_angle(odometry_moved.yaw_rad - moved_truth.yaw_rad)), 20.0 * kDeg);
+}
+
+// The simulator's wheel slips (one wheel reads 30 % fast for 0.5 s: the odometry turns by 3-6
+// degrees a scan), one every 10 s along the office loop for 40 s. The scan is de-skewed by the
+// odometry's motion since the previous scan, and a slip that starts or ends between two scans
+// bends it; the alignment of a bent scan from a seed turned by the slip came out 1-2 degrees off
+// (on the office loop with its usual slips, 0.5 a minute, seed 3 had 0.28 degrees over 1 s
+// against the target's 0.2). Now the constant-velocity guess tried against a slip is aligned on
+// the scan de-skewed by the guess, and a scan whose registered turn bends it against the turn it
+// was de-skewed by is de-skewed by the registered turn and aligned again. Measured, seeds 1 / 2 /
+// 3: RMS over 1 s 0.087 / 0.083 / 0.111 degrees, at most 0.43 / 0.46 / 0.50 (before: 0.343 /
+// 0.255 / 0.486, at most 2.2 / 1.6 / 2.4).
+TEST(ScanRegistration, AScanDeSkewedByASlippingWheelIsBentBack) {
+  sim::Scenario s = office_loop(40.0);
+  s.sensors.slips_per_minute = 6.0;
+  for (const std::uint64_t seed : {1, 2, 3}) {
+    const sim::SimulationOutput out = sim::simulate(s, seed);
+    const Errors e = run(out, s, true);
+    EXPECT_LT(e.relative_1s_rad, 0.2 * kDeg) << seed;
+    EXPECT_LT(e.max_1s_rad, 0.6 * kDeg) << seed;
+    std::printf("seed %d: relative 1 s %.3f deg (at most %.3f), %.4f m\n", static_cast<int>(seed),
+                e.relative_1s_rad / kDeg, e.max_1s_rad / kDeg, e.relative_1s_m);
+  }
 }
 
 // A corridor with nothing ahead: the scans say nothing about the motion along it. The

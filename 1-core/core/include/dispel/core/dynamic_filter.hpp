@@ -74,12 +74,14 @@ struct FilterCounters {
   /// Registration (when on): scans aligned with the map, scans that fell back to their seed
   /// (odometry or constant velocity), registered scans with an unconstrained direction, and
   /// scans registered without odometry, and scans registered from the constant-velocity guess
-  /// because the odometry slipped (RegistrationReport::odometry_overruled).
+  /// because the odometry slipped (RegistrationReport::odometry_overruled), and scans de-skewed
+  /// by their registered turn and aligned again (RegistrationReport::realignments).
   std::int64_t scans_registered = 0;
   std::int64_t registration_fallbacks = 0;
   std::int64_t registration_degenerate = 0;
   std::int64_t scans_without_odometry = 0;
   std::int64_t odometry_overruled = 0;
+  std::int64_t scans_realigned = 0;
 };
 
 /// A tracked object as reported to the caller. Positions and velocities are in the fixed frame.

@@ -89,6 +89,9 @@ struct RegistrationReport {
   /// The odometry's motion and the constant-velocity guess parted (a wheel slipped), and the
   /// guess matched clearly more of the scan: registered from the guess.
   bool odometry_overruled = false;
+  /// Times the scan was de-skewed by its registered turn and aligned again: the turn it was first
+  /// de-skewed by (the odometry's, or the guess's) bent it (a slip starts or ends within a scan).
+  std::int32_t realignments = 0;
   std::int32_t points = 0;  ///< Points of the thinned scan.
   std::int32_t iterations = 0;
   double inlier_share = 0.0;  ///< Share of the points with a correspondence.
@@ -182,8 +185,12 @@ class ScanRegistration {
   void forget_candidate_voxels();
   bool nearest_candidate(std::size_t i, const Eigen::Vector2d& q, double threshold, bool need_any,
                          double& best, Reference& found);
-  Pose2 align(const Pose2& seed, const Pose2& delta, double threshold, RegistrationReport& report);
-  void thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s, bool deskew_wanted);
+  // Whose noise the seed of align() has: the odometry's (it grows with the motion) or a
+  // constant-velocity guess's (also a seed that is an earlier alignment of the same scan).
+  enum class SeedNoise { kOdometry, kGuess };
+  Pose2 align(const Pose2& seed, const Pose2& delta, double threshold, SeedNoise noise,
+              RegistrationReport& report);
+  bool thin_and_deskew(const LaserScan& scan, const Pose2& motion_per_s, bool deskew_wanted);
   Eigen::Vector2d normal_at(std::size_t b) const;
   Eigen::Vector2d map_normal(const Voxel& voxel, std::uint8_t slot);
 

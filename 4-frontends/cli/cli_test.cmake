@@ -132,6 +132,27 @@ foreach(k RANGE 4)
   set(previous_cpu ${cpu})
 endforeach()
 
+# The heap made resident before the first scan (16 MB by default; 0 under a sanitizer's
+# allocator) changes no output: the same bag without it.
+string(JSON heap GET "${stats}" resident_heap_bytes)
+if(NOT heap EQUAL 16777216 AND NOT heap EQUAL 0)
+  message(FATAL_ERROR "resident_heap_bytes ${heap}, expected 16 MB (or 0 under a sanitizer)")
+endif()
+set(no_heap ${WORK_DIR}/no_heap.bag)
+file(REMOVE ${no_heap})
+run_dispel(rc so se filter ${BAG} -o ${no_heap} --static-sensor --scale-to-scanner
+           --resident-heap-mb 0 --stats ${WORK_DIR}/no_heap.json)
+file(READ ${WORK_DIR}/no_heap.json no_heap_stats)
+string(JSON heap GET "${no_heap_stats}" resident_heap_bytes)
+execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files ${out} ${no_heap} RESULT_VARIABLE differ)
+if(NOT rc EQUAL 0 OR NOT heap EQUAL 0 OR NOT differ EQUAL 0)
+  message(FATAL_ERROR "--resident-heap-mb 0: rc ${rc}, resident_heap_bytes ${heap}, bags differ: "
+                      "${differ}; ${se}")
+endif()
+file(REMOVE ${no_heap})
+expect_filter_error("--resident-heap-mb: Value -1 not in range 0 to 4096" ${BAG} --static-sensor
+                    --resident-heap-mb -1)
+
 # Ctrl-C: either interrupted with nothing written, or already done with a complete bag. A signal
 # that comes while the program is still loading its shared libraries (MRPT's, for rawlogs, take
 # about 0.1 s; more on a busy machine) ends it before its handler is installed, silently: then

@@ -71,6 +71,12 @@ int main(int argc, char** argv) {
                        "Carry N_min, L_d and L_s over from the thesis's scanner to this one");
   filter_cmd->add_option("--stats", filter.stats_path, "Write statistics as JSON here");
   filter_cmd
+      ->add_option("--resident-heap-mb", filter.resident_heap_mb,
+                   "Heap made resident before the first scan, so that no scan waits for memory "
+                   "touched the first time; 0: none")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
+  filter_cmd
       ->add_option("--compression", filter.compression,
                    "Output compression: bz2 or lz4 for a ROS 1 bag, zstd or lz4 for MCAP")
       ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))

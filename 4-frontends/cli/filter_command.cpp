@@ -11,11 +11,13 @@
 #include "cli_common.hpp"
 #include "dispel/core/percentile.hpp"
 #include "dispel/io/atomic_file.hpp"
+#include "dispel/pipeline/resident_heap.hpp"
 
 namespace dispel::apps {
 namespace {
 
-nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::FilterJobStats& s) {
+nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::FilterJobStats& s,
+                                  const pipeline::ResidentHeap& heap) {
   nlohmann::ordered_json j;
   j["input"] = o.input;
   j["output"] = o.output;
@@ -70,6 +72,7 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
   };
   j["scan_time_us"] = times_us(s.scan_time_s);
   j["scan_cpu_time_us"] = times_us(s.scan_cpu_time_s);
+  j["resident_heap_bytes"] = heap.bytes;  // 0: none made resident (or a sanitizer's allocator).
   nlohmann::ordered_json slowest = nlohmann::ordered_json::array();
   for (const jobs::SlowScan& slow : s.slowest_scans) {
     slowest.push_back({{"index", slow.index},
@@ -156,6 +159,9 @@ int run_with_progress(const char* command, const std::string& output, Job&& job)
 
 int run_filter(FilterCommandOptions options) {
   options.job.compression = compression_named(options.compression);
+  // Before the job's threads start, so that they allocate from the heap made resident.
+  const pipeline::ResidentHeap heap =
+      pipeline::reserve_resident_heap(static_cast<std::size_t>(options.resident_heap_mb) << 20);
   jobs::FilterJobStats stats;
   const int code = run_with_progress(
       "filter", options.job.output,
@@ -190,7 +196,8 @@ int run_filter(FilterCommandOptions options) {
 
   if (!options.stats_path.empty()) {
     try {
-      io::write_file_atomically(options.stats_path, stats_json(options.job, stats).dump(2) + "\n");
+      io::write_file_atomically(options.stats_path,
+                                stats_json(options.job, stats, heap).dump(2) + "\n");
     } catch (const std::exception& e) {
       std::cerr << "dispel filter: statistics not written: " << error_line(e.what()) << " ("
                 << options.job.output << " was written)\n";

@@ -13,6 +13,8 @@ struct FilterCommandOptions {
   jobs::FilterJobOptions job;
   std::string stats_path;  ///< Empty: no statistics file.
   std::string compression = "none";
+  /// Heap made resident before the first scan (pipeline::reserve_resident_heap); 0: none.
+  int resident_heap_mb = 16;
 };
 
 /// Runs the job, prints a progress bar on a terminal and a summary on stdout, writes the

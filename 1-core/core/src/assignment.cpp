@@ -8,16 +8,21 @@ namespace dispel {
 // Shortest augmenting paths with row and column potentials (Kuhn-Munkres in the O(n^3) form).
 // Rows are added one at a time; Dijkstra over reduced costs finds the cheapest way to place it.
 std::vector<int> min_cost_assignment(const std::vector<double>& cost, int n) {
-  assert(static_cast<int>(cost.size()) == n * n);
+  return min_cost_assignment(cost, n, n);
+}
+
+std::vector<int> min_cost_assignment(const std::vector<double>& cost, int rows, int cols) {
+  assert(rows <= cols && static_cast<int>(cost.size()) == rows * cols);
+  const int n = cols;
   constexpr double kInf = std::numeric_limits<double>::infinity();
   // 1-based with a virtual column 0 holding the row being placed.
-  std::vector<double> u(n + 1, 0.0);
+  std::vector<double> u(rows + 1, 0.0);
   std::vector<double> v(n + 1, 0.0);
   std::vector<int> row_of(n + 1, 0);
   std::vector<int> way(n + 1, 0);
   std::vector<double> min_reduced(n + 1);
   std::vector<char> used(n + 1);
-  for (int row = 1; row <= n; ++row) {
+  for (int row = 1; row <= rows; ++row) {
     row_of[0] = row;
     int col0 = 0;
     min_reduced.assign(n + 1, kInf);
@@ -55,7 +60,7 @@ std::vector<int> min_cost_assignment(const std::vector<double>& cost, int n) {
       col0 = col1;
     } while (col0 != 0);
   }
-  std::vector<int> column_of_row(n, -1);
+  std::vector<int> column_of_row(rows, -1);
   for (int col = 1; col <= n; ++col) {
     if (row_of[col] != 0) column_of_row[row_of[col] - 1] = col - 1;
   }

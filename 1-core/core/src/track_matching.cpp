@@ -205,12 +205,14 @@ void DynamicFilter::associate_global(double stamp_s) {
     objs.erase(std::unique(objs.begin(), objs.end()), objs.end());
     std::sort(trks.begin(), trks.end());
     trks.erase(std::unique(trks.begin(), trks.end()), trks.end());
-    // Rows: objects then one dummy row per track (track unmatched, cost 0); columns: tracks then
-    // one dummy column per object (object unmatched, cost unmatched_cost).
+    // Rows: objects; columns: tracks (a track no object takes costs nothing), then one dummy
+    // column per object (object unmatched, cost unmatched_cost). Rows <= columns: the
+    // assignment's cost grows with the objects squared, not with the tracks cubed (a warehouse
+    // aisle kept 100 tracks in reach of 20 objects: 1.4 ms for such a scan with a square matrix).
     const auto no = static_cast<int>(objs.size());
     const auto nt = static_cast<int>(trks.size());
     const int n = no + nt;
-    cost_.assign(static_cast<std::size_t>(n) * n, 0.0);
+    cost_.resize(static_cast<std::size_t>(no) * n);
     for (int r = 0; r < no; ++r) {
       for (int c = 0; c < n; ++c) cost_[r * n + c] = c < nt ? forbidden : unmatched_cost;
     }
@@ -221,7 +223,7 @@ void DynamicFilter::associate_global(double stamp_s) {
                                      trks.begin());
       cost_[r * n + c] = pairs[p].cost;
     }
-    const std::vector<int> col = min_cost_assignment(cost_, n);
+    const std::vector<int> col = min_cost_assignment(cost_, no, n);
     for (int r = 0; r < no; ++r) {
       if (col[r] < nt && cost_[r * n + col[r]] < forbidden)
         track_of_object_[objs[r]] = trks[col[r]];

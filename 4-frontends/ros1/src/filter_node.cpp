@@ -18,6 +18,7 @@
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/frame_tree.hpp"
 #include "dispel/io/ros1_messages.hpp"
+#include "dispel/pipeline/resident_heap.hpp"
 #include "dispel/ros1/convert.hpp"
 #include "dispel/ros1/filter_node_core.hpp"
 #include "dispel/ros1/parameters.hpp"
@@ -146,6 +147,9 @@ class FilterNode {
 }  // namespace dispel::ros1
 
 int main(int argc, char** argv) {
+  // Before ROS starts its threads: the filter's first scans do not wait for fresh memory (16 MB,
+  // as `dispel filter` makes resident by default).
+  dispel::pipeline::reserve_resident_heap(std::size_t{16} << 20);
   ros::init(argc, argv, "dispel_filter");
   ros::NodeHandle nh;
   ros::NodeHandle private_nh("~");

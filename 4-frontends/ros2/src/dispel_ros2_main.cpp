@@ -28,6 +28,7 @@
 #include "dispel/io/errors.hpp"
 #include "dispel/io/ros2_messages.hpp"
 #include "dispel/io/text.hpp"
+#include "dispel/pipeline/resident_heap.hpp"
 #include "dispel/ros2/dds.hpp"
 #include "dispel/ros2/filter_node.hpp"
 #include "dispel/ros2/graph.hpp"
@@ -361,12 +362,17 @@ int run_odometry(const ros2::OdometryNodeSettings& settings) {
 
 }  // namespace
 
+// Heap made resident before the first scan, as `dispel filter` does by default.
+constexpr std::size_t kResidentHeapBytes = std::size_t{16} << 20;
+
 int main(int argc, char** argv) {
   const std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || (args[0] != "filter" && args[0] != "odometry")) {
     return usage(args.empty() ? "no command" : "unknown command " + io::quote(args[0]));
   }
   const bool filter = args[0] == "filter";
+  // Before DDS starts its threads: the filter's first scans do not wait for fresh memory.
+  if (filter) pipeline::reserve_resident_heap(kResidentHeapBytes);
   std::vector<std::string> params_files;
   std::vector<ros2::ParameterText> overrides;  // -p name:=value, after the files, as rcl.
   std::string node_name = filter ? "dispel_filter" : "dispel_odometry";

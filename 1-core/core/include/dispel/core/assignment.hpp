@@ -11,4 +11,9 @@ namespace dispel {
 /// cost larger than any sum of allowed ones. Returns the column of each row. O(n^3) time.
 std::vector<int> min_cost_assignment(const std::vector<double>& cost, int n);
 
+/// The same for @p rows <= @p cols: one column per row, each column at most once, the sum of
+/// cost[row * cols + column] smallest; columns no row takes cost nothing. O(rows^2 x cols) time:
+/// matching a few objects against many tracks, it is not paid for the tracks left over.
+std::vector<int> min_cost_assignment(const std::vector<double>& cost, int rows, int cols);
+
 }  // namespace dispel

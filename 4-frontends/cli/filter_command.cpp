@@ -44,6 +44,7 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
                         {"fragments", s.counters.beams_removed_fragments}};
   j["beams_kept_long_occupied"] = s.counters.beams_kept_long_occupied;
   j["free_space_refuted"] = s.counters.free_space_refuted;
+  j["fragment_follows"] = s.counters.fragment_follows;
   j["laser_only"] = s.laser_only;
   j["beams_kept_explained"] = s.counters.beams_kept_explained;
   j["registration"] = {{"enabled", s.config.registration.enabled},

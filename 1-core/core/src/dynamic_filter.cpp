@@ -177,6 +177,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   if (checked.learn) {
     update_velocities(scan.stamp_s);
     classify(scan, pose, out.segmentation);
+    follow_fragments(scan, out.segmentation);
     // The body is learned only when the sensor's motion was measured (by odometry, or by a
     // registration that holds in every direction): a guessed motion while the robot stands would
     // count someone standing in front of it as moving with it.
@@ -866,6 +867,59 @@ bool DynamicFilter::near_dynamic_track(const Eigen::Vector2d& point_m, double st
     if ((point_m - (a + u * ab)).norm() <= limit) return true;
   }
   return false;
+}
+
+// Beyond the thesis (tracking.follow_fragments): a dynamic track that no object matched in this
+// scan follows the beams of no object beside its predicted outline (the fragments that
+// beam_label() removes with it), when at least two of them, and half of them, lie in space seen
+// free. Its centroid is updated with theirs; its edges are re-anchored on the outermost of them
+// with their velocity held (a fragment's ends are not the walker's). A walker who walks on until
+// each leg is fewer beams than N_min stays followed and removed.
+void DynamicFilter::follow_fragments(const LaserScan& scan, const Segmentation& segmentation) {
+  const double limit = config_.tracking.fragment_distance_m;
+  if (!config_.tracking.follow_fragments || !(limit > 0.0) || !config_.free_space.enabled) return;
+  const std::vector<std::int32_t>& labels = segmentation.beam_labels;
+  for (Track& t : tracks_) {
+    if (t.cls.object_class != ObjectClass::kDynamic || t.object_index >= 0 ||
+        t.missed_scans > kFragmentMaxMissed) {
+      continue;
+    }
+    const double dt = scan.stamp_s - t.last_seen_s;
+    if (!(dt > 0.0)) continue;
+    const Eigen::Vector2d a = t.kf[kFirst].predicted_position(dt);
+    const Eigen::Vector2d ab = t.kf[kLast].predicted_position(dt) - a;
+    const double len2 = ab.squaredNorm();
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    std::int32_t count = 0, in_free = 0;
+    std::size_t first = 0, last = 0;
+    for (std::size_t b = 0; b < scan.size(); ++b) {
+      if (labels[b] != kLabelNoise || !scan.is_valid(b)) continue;
+      if (!explained_.empty() && explained_[b] != 0) continue;
+      const Eigen::Vector2d& p = beam_points_[b];
+      const double u = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+      if ((p - (a + u * ab)).norm() > limit) continue;
+      if (count == 0) first = b;
+      last = b;
+      sum += p;
+      ++count;
+      if (free_space_.known_free(p)) ++in_free;
+    }
+    if (count < 2 || 2 * in_free < count) continue;
+    double speed = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      PointVelocityFilter& kf = t.kf[k];
+      if (k == kCentroid) {
+        kf.predict_and_update(sum / static_cast<double>(count), dt, config_.velocity);
+      } else {
+        kf.predict_and_hold(beam_points_[k == kFirst ? first : last], dt, config_.velocity);
+      }
+      speed = std::min(speed, kf.velocity().norm());
+    }
+    t.speed_mps = speed;
+    t.last_seen_s = scan.stamp_s;
+    t.missed_scans = 0;
+    ++counters_.fragment_follows;
+  }
 }
 
 void DynamicFilter::write_tracks(FilterResult& out) const {

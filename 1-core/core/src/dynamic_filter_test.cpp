@@ -220,6 +220,9 @@ std::pair<std::set<std::uint64_t>, std::set<std::uint64_t>> crossing_ids(Matchin
   DynamicFilterConfig config;
   config.tracking.matching = matching;
   config.tracking.inherit_on_split = false;
+  // The matching alone: a walker half hidden by the other is followed through its fragments
+  // whatever the matching (tracking.follow_fragments keeps the thesis's matching's track too).
+  config.tracking.follow_fragments = false;
   DynamicFilter filter{config};
   std::set<std::uint64_t> before;
   std::set<std::uint64_t> after;

@@ -239,9 +239,11 @@ TEST(SimPipeline, DrivingRobotAlongRoughCorridorsKeepsItsWalls) {
 
 // An open hall whose walls are mostly out of range, full of small things whose returns flicker,
 // people crossing it far from the robot. The default keeps the clutter (it never moves) and
-// misses most of the walkers: they are legs of 2-3 beams at 5-10 m, under N_min (measured over
-// five seeds: 0.9998 kept, 0.38 removed). N_min falling with range removes them (0.9993, 0.92)
-// but is off by default: on real recordings it removes far clutter (docs/dynamic_filter.md).
+// misses many of the walkers: they are legs of 2-3 beams at 5-10 m, under N_min, and only those
+// first seen nearer are followed out there through their fragments (measured over five seeds:
+// 0.9998 kept, 0.62 removed; 0.38 before they were followed). N_min falling with range removes
+// them (0.9993, 0.92 before) but is off by default: on real recordings it removes far clutter
+// (docs/dynamic_filter.md).
 TEST(SimPipeline, AnOpenClutteredHallKeepsItsClutterAndFarWalkersNeedNminByWidth) {
   const std::string dir = test::temp_dir();
   const sim::Scenario hall = load_scenario(scenario_path("cluttered_hall"));
@@ -261,8 +263,9 @@ TEST(SimPipeline, AnOpenClutteredHallKeepsItsClutterAndFarWalkersNeedNminByWidth
     removed[with_width] = r.rejection_rate();
     std::remove(o.output.c_str());
   }
-  EXPECT_LT(removed[0], 0.5);   // Measured 0.36.
-  EXPECT_GE(removed[1], 0.85);  // Measured 0.92.
+  EXPECT_LT(removed[0], 0.75);  // Measured 0.60 (0.36 before dynamic tracks followed fragments).
+  EXPECT_GE(removed[1], 0.85);  // Measured 0.95 (0.92 before).
+  EXPECT_GT(removed[1] - removed[0], 0.15);
   std::remove(bag.c_str());
 }
 

@@ -68,6 +68,9 @@ struct FilterCounters {
   /// Beams of no object removed as fragments of a dynamic track (tracking.fragment_distance_m);
   /// included in beams_removed_dynamic.
   std::int64_t beams_removed_fragments = 0;
+  /// Scans in which a dynamic track was followed through fragments (tracking.follow_fragments),
+  /// summed over the tracks.
+  std::int64_t fragment_follows = 0;
   /// Beams of moving or unknown objects kept because the registered map explains them
   /// (registration.explained_*).
   std::int64_t beams_kept_explained = 0;
@@ -259,6 +262,7 @@ class DynamicFilter {
   BeamLabel beam_label(const LaserScan& scan, std::size_t b, std::int32_t segment_label,
                        bool learned);
   bool near_dynamic_track(const Eigen::Vector2d& point_m, double stamp_s) const;
+  void follow_fragments(const LaserScan& scan, const Segmentation& segmentation);
   void write_tracks(FilterResult& out) const;
 
   DynamicFilterConfig config_;

@@ -54,6 +54,13 @@ struct TrackingConfig {
   /// its edge points, predicted to the scan's time) belong to it and are removed too. 0: off (the
   /// thesis keeps every beam of no object).
   double fragment_distance_m = 0.3;
+  /// A dynamic track that no object matched is followed through the beams of no object within
+  /// fragment_distance_m of its predicted outline, when there are at least two and at least half
+  /// of them lie in space seen free (free_space, which it needs): a walker gone too far, or too
+  /// hidden, to make N_min beams stays tracked, and its beams removed, instead of coasting and
+  /// being forgotten. Half in space seen free: without it a false dynamic track on a real recording
+  /// walked for 2.5 s along small static things. false: off (the thesis has no such rule).
+  bool follow_fragments = true;
 
   /// Throws std::invalid_argument naming the first bad field and its value.
   void validate() const;

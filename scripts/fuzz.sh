@@ -75,7 +75,9 @@ fuzz_one() {
   for o in "${options[@]}"; do
     case "$o" in
       -ignore_ooms=1) ignored_kinds+=(oom) ;;
-      -ignore_timeouts=1) ignored_kinds+=(timeout) ;;
+      # A slow unit (libFuzzer's slow-unit-*: an input that took longer than -report_slow_units,
+      # 10 s, without a timeout being called) is a timeout's kind: ignored with timeouts.
+      -ignore_timeouts=1) ignored_kinds+=(timeout slow-unit) ;;
       -ignore_crashes=1) ignore_crashes=1 ;;
       -malloc_limit_mb=*) limits+=("$o") ;;
     esac

@@ -6,6 +6,7 @@
 
 #include "dispel/jobs/convert_job.hpp"
 #include "dispel/jobs/filter_job.hpp"
+#include "dispel/pipeline/resident_heap.hpp"
 
 namespace dispel::apps {
 
@@ -14,7 +15,7 @@ struct FilterCommandOptions {
   std::string stats_path;  ///< Empty: no statistics file.
   std::string compression = "none";
   /// Heap made resident before the first scan (pipeline::reserve_resident_heap); 0: none.
-  int resident_heap_mb = 16;
+  int resident_heap_mb = static_cast<int>(pipeline::kDefaultResidentHeapBytes >> 20);
 };
 
 /// Runs the job, prints a progress bar on a terminal and a summary on stdout, writes the

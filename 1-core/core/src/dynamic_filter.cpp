@@ -853,18 +853,28 @@ bool DynamicFilter::beside_moving_track(const Track& self, const Eigen::Vector2d
 
 // Whether a point lies within fragment_distance_m of the outline (edge to edge, predicted to now)
 // of a dynamic track seen in this scan or missed for a few scans at most.
+// A track's outline, the segment between its edge points, predicted @p dt after it was last seen.
+struct PredictedOutline {
+  Eigen::Vector2d a, ab;
+  double len2;
+  PredictedOutline(const PointVelocityFilter& first, const PointVelocityFilter& last, double dt)
+      : a(first.predicted_position(dt)),
+        ab(last.predicted_position(dt) - a),
+        len2(ab.squaredNorm()) {}
+  double distance(const Eigen::Vector2d& p) const {
+    const double u = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    return (p - (a + u * ab)).norm();
+  }
+};
+
 bool DynamicFilter::near_dynamic_track(const Eigen::Vector2d& point_m, double stamp_s) const {
   const double limit = config_.tracking.fragment_distance_m;
   for (const Track& t : tracks_) {
     if (t.cls.object_class != ObjectClass::kDynamic || t.missed_scans > kFragmentMaxMissed) {
       continue;
     }
-    const double dt = stamp_s - t.last_seen_s;
-    const Eigen::Vector2d a = t.kf[kFirst].predicted_position(dt);
-    const Eigen::Vector2d ab = t.kf[kLast].predicted_position(dt) - a;
-    const double len2 = ab.squaredNorm();
-    const double u = len2 > 0.0 ? std::clamp((point_m - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-    if ((point_m - (a + u * ab)).norm() <= limit) return true;
+    const PredictedOutline outline(t.kf[kFirst], t.kf[kLast], stamp_s - t.last_seen_s);
+    if (outline.distance(point_m) <= limit) return true;
   }
   return false;
 }
@@ -886,9 +896,7 @@ void DynamicFilter::follow_fragments(const LaserScan& scan, const Segmentation& 
     }
     const double dt = scan.stamp_s - t.last_seen_s;
     if (!(dt > 0.0)) continue;
-    const Eigen::Vector2d a = t.kf[kFirst].predicted_position(dt);
-    const Eigen::Vector2d ab = t.kf[kLast].predicted_position(dt) - a;
-    const double len2 = ab.squaredNorm();
+    const PredictedOutline outline(t.kf[kFirst], t.kf[kLast], dt);
     Eigen::Vector2d sum = Eigen::Vector2d::Zero();
     std::int32_t count = 0, in_free = 0;
     std::size_t first = 0, last = 0;
@@ -896,8 +904,7 @@ void DynamicFilter::follow_fragments(const LaserScan& scan, const Segmentation& 
       if (labels[b] != kLabelNoise || !scan.is_valid(b)) continue;
       if (!explained_.empty() && explained_[b] != 0) continue;
       const Eigen::Vector2d& p = beam_points_[b];
-      const double u = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-      if ((p - (a + u * ab)).norm() > limit) continue;
+      if (outline.distance(p) > limit) continue;
       if (count == 0) first = b;
       last = b;
       sum += p;

@@ -147,9 +147,8 @@ class FilterNode {
 }  // namespace dispel::ros1
 
 int main(int argc, char** argv) {
-  // Before ROS starts its threads: the filter's first scans do not wait for fresh memory (16 MB,
-  // as `dispel filter` makes resident by default).
-  dispel::pipeline::reserve_resident_heap(std::size_t{16} << 20);
+  // Before ROS starts its threads: the filter's first scans do not wait for fresh memory.
+  dispel::pipeline::reserve_resident_heap(dispel::pipeline::kDefaultResidentHeapBytes);
   ros::init(argc, argv, "dispel_filter");
   ros::NodeHandle nh;
   ros::NodeHandle private_nh("~");

@@ -362,9 +362,6 @@ int run_odometry(const ros2::OdometryNodeSettings& settings) {
 
 }  // namespace
 
-// Heap made resident before the first scan, as `dispel filter` does by default.
-constexpr std::size_t kResidentHeapBytes = std::size_t{16} << 20;
-
 int main(int argc, char** argv) {
   const std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty() || (args[0] != "filter" && args[0] != "odometry")) {
@@ -372,7 +369,7 @@ int main(int argc, char** argv) {
   }
   const bool filter = args[0] == "filter";
   // Before DDS starts its threads: the filter's first scans do not wait for fresh memory.
-  if (filter) pipeline::reserve_resident_heap(kResidentHeapBytes);
+  if (filter) pipeline::reserve_resident_heap(pipeline::kDefaultResidentHeapBytes);
   std::vector<std::string> params_files;
   std::vector<ros2::ParameterText> overrides;  // -p name:=value, after the files, as rcl.
   std::string node_name = filter ? "dispel_filter" : "dispel_odometry";

@@ -7,6 +7,10 @@
 
 namespace dispel::pipeline {
 
+/// What the programs that filter scans make resident at start (`dispel filter`'s default, the
+/// ROS 1 and ROS 2 filter nodes).
+inline constexpr std::size_t kDefaultResidentHeapBytes = std::size_t{16} << 20;
+
 /// What reserve_resident_heap() did.
 struct ResidentHeap {
   bool reserved = false;  ///< false: the allocator is not glibc's (or is a sanitizer's).

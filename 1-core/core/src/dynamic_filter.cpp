@@ -206,12 +206,15 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
     for (std::size_t b = 0; b < out.labels.size(); ++b) {
       keep_[b] = out.labels[b] == BeamLabel::kStatic || out.labels[b] == BeamLabel::kNoObject;
     }
+    const std::int64_t restarted = registration_.voxels_restarted();
     if (config_.free_space.enabled) {
-      registration_.add(keep_,
-                        [this](const Eigen::Vector2d& p) { return free_space_.known_free(p); });
+      registration_.add(
+          keep_, [this](const Eigen::Vector2d& p) { return free_space_.known_free(p); },
+          [this](const Eigen::Vector2d& p) { return free_space_.long_free(p); });
     } else {
       registration_.add(keep_, {});
     }
+    counters_.map_voxels_restarted += registration_.voxels_restarted() - restarted;
   }
   ++counters_.events[static_cast<std::size_t>(checked.event)];
   record_work(scan, out);

@@ -172,6 +172,15 @@ bool FreeSpaceMap::known_free(const Eigen::Vector2d& point_m, double max_beam_sp
   return true;
 }
 
+bool FreeSpaceMap::long_free(const Eigen::Vector2d& point_m) const {
+  std::int64_t ix = 0, iy = 0;
+  if (!cell_of(point_m, ix, iy)) return false;
+  const Cell* cell = find(ix, iy);
+  return cell != nullptr &&
+         cell->balance <= -(config_.min_free_observations + config_.max_recent_hits) &&
+         known_free(ix, iy);
+}
+
 int FreeSpaceMap::occupied_scans(const Eigen::Vector2d& point_m) const {
   const Cell* cell = find(point_m);
   return cell != nullptr ? cell->occupied : 0;

@@ -48,6 +48,29 @@ TEST(FreeSpaceMap, SpaceSeenThroughIsFreeButNotTheSurfaceOrBeyondIt) {
   EXPECT_FALSE(map.known_free({1.0, 0.0}));
 }
 
+TEST(FreeSpaceMap, LongFreeIsSpaceSeenThroughInAsManyMoreScansAsTheBalanceCounts) {
+  FreeSpaceConfig c;
+  FreeSpaceMap map(c);
+  const int cap = c.min_free_observations + c.max_recent_hits;  // 13.
+  // Something stood at 2 m for 20 scans, then left: the space is known free after
+  // min_free_observations + 20 scans seen through (the balance was clamped at +13), and long
+  // free only once the balance reaches -13, 26 scans after the last hit.
+  for (int k = 0; k < 20; ++k) map.add_scan(ring(2.0F), Pose2{});
+  int to_known = -1, to_long = -1;
+  for (int k = 1; k <= 40; ++k) {
+    map.add_scan(ring(4.0F), Pose2{});
+    if (to_known < 0 && map.known_free({2.0, 0.0})) to_known = k;
+    if (to_long < 0 && map.long_free({2.0, 0.0})) to_long = k;
+    EXPECT_FALSE(map.long_free({2.0, 0.0}) && !map.known_free({2.0, 0.0})) << k;
+  }
+  EXPECT_EQ(to_known, cap + c.min_free_observations);
+  EXPECT_EQ(to_long, 2 * cap);
+  EXPECT_FALSE(map.long_free({3.9, 0.0}));  // The surface's margin: never seen through.
+  map.add_scan(ring(2.0F), Pose2{});        // Back again: one hit.
+  EXPECT_TRUE(map.known_free({2.0, 0.0}));  // A walker crossing free space.
+  EXPECT_FALSE(map.long_free({2.0, 0.0}));
+}
+
 TEST(FreeSpaceMap, ThinThingsNeedSpaceSeenThroughByBeamsDenseEnoughToHitThem) {
   // ring()'s beams are 0.5 degrees apart: 8.7 mm at 1 m, 44 mm at 5 m. A chair leg 2 cm wide at
   // 5 m can sit between two beams; at 1 m it cannot.

@@ -706,7 +706,8 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
 }
 
 void ScanRegistration::add(const std::vector<char>& keep,
-                           const std::function<bool(const Eigen::Vector2d&)>& in_free_space) {
+                           const std::function<bool(const Eigen::Vector2d&)>& in_free_space,
+                           const std::function<bool(const Eigen::Vector2d&)>& long_free) {
   explaining_valid_ = false;
   const double max_r2 = config_.max_range_m * config_.max_range_m;
   const PoseTransform to_fixed(last_pose_);
@@ -723,6 +724,15 @@ void ScanRegistration::add(const std::vector<char>& keep,
       last_key = key;
     }
     if (voxel->last_scan != scan_count_) {
+      // Hit again after a time unseen where the scanner has long seen through: what stood there
+      // left. Its points would explain what comes by next along the same line (a cart driving to
+      // and fro explained its side by its earlier passes: the simulated warehouse's cart kept most
+      // of its beams).
+      if (voxel->scans > 0 && last_stamp_s_ - voxel->last_stamp_s > config_.explained_max_age_s &&
+          long_free && long_free(world_points_[b])) {
+        *voxel = Voxel{};
+        ++voxels_restarted_;
+      }
       if (voxel->scans == 0) {
         voxel->first_stamp_s = last_stamp_s_;
         voxel->in_free_space = in_free_space && in_free_space(world_points_[b]);

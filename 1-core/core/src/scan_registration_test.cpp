@@ -337,6 +337,45 @@ TEST(ScanRegistration, ReturnsFarFromTheSeedStillFindTheirCorrespondences) {
               report.points, report.inlier_share);
 }
 
+// Something seen for a second is structure that explains its own beams. Unseen for 2 s, it is
+// seen again: when the scanner has long seen through its place meanwhile (long_free), what stood
+// there left, and what is there now (a cart back on its track) is a newcomer, its voxels started
+// afresh and explaining nothing until it has been there explained_min_span_s. Without that
+// evidence the old voxels explain it at once.
+TEST(ScanRegistration, AVoxelHitAgainWhereTheScannerLongSawThroughIsStartedAfresh) {
+  for (const bool seen_through : {false, true}) {
+    ScanRegistration reg{RegistrationConfig{}};
+    RegistrationReport report;
+    const auto explained_beams = [&reg]() {
+      int n = 0;
+      for (std::size_t b = 0; b < 720; ++b) n += reg.explained(b) ? 1 : 0;
+      return n;
+    };
+    for (int k = 0; k < 10; ++k) {
+      reg.register_scan(posts_scan(Pose2{}, 0.1 * k), std::nullopt, report);
+      reg.add(std::vector<char>(720, 1), {});
+    }
+    const LaserScan scan = posts_scan(Pose2{}, 1.0);
+    const auto returns = static_cast<int>(std::count_if(scan.ranges_m.begin(), scan.ranges_m.end(),
+                                                        [](float r) { return r < 20.0F; }));
+    ASSERT_GE(returns, 32);  // 2-4 per post.
+    reg.register_scan(scan, std::nullopt, report);
+    EXPECT_GE(explained_beams(), returns - 2);  // Structure, seen now and then.
+    reg.add(std::vector<char>(720, 1), {});
+    reg.register_scan(posts_scan(Pose2{}, 3.0), std::nullopt, report);  // Unseen for 2 s.
+    EXPECT_EQ(explained_beams(), 0);  // Not hit within explained_max_age_s.
+    const auto long_free = [seen_through](const Eigen::Vector2d&) { return seen_through; };
+    reg.add(std::vector<char>(720, 1), {}, long_free);
+    EXPECT_EQ(reg.voxels_restarted() > 0, seen_through);
+    reg.register_scan(posts_scan(Pose2{}, 3.1), std::nullopt, report);
+    if (seen_through) {
+      EXPECT_EQ(explained_beams(), 0);
+    } else {
+      EXPECT_GE(explained_beams(), returns - 2);
+    }
+  }
+}
+
 TEST(ScanRegistration, BadConfigurationsNameTheField) {
   RegistrationConfig c;
   c.voxel_size_m = 0.0;

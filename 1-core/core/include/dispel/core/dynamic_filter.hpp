@@ -85,6 +85,9 @@ struct FilterCounters {
   std::int64_t scans_without_odometry = 0;
   std::int64_t odometry_overruled = 0;
   std::int64_t scans_realigned = 0;
+  /// Voxels of the registered map started afresh: hit again after a time unseen where the
+  /// scanner had long seen through (ScanRegistration::add()).
+  std::int64_t map_voxels_restarted = 0;
 };
 
 /// A tracked object as reported to the caller. Positions and velocities are in the fixed frame.

@@ -86,6 +86,11 @@ class FreeSpaceMap {
   /// railing's bar) and see "through" it; the same thing seen close later did not arrive there.
   bool known_free(const Eigen::Vector2d& point_m, double max_beam_spacing_m) const;
 
+  /// known_free(), and the point's own cell has been seen through in at least
+  /// min_free_observations + max_recent_hits scans more than it was hit, the most its balance
+  /// counts: whatever stood there left long ago (within memory_s).
+  bool long_free(const Eigen::Vector2d& point_m) const;
+
   /// Scans the point's cell has been hit in more than seen through, between 0 and
   /// 2 * long_occupied_scans (0 outside the window).
   int occupied_scans(const Eigen::Vector2d& point_m) const;

@@ -126,14 +126,22 @@ class ScanRegistration {
   /// voxels beyond local_map_radius_m. @p in_free_space (may be empty: never) says whether a
   /// point ends where the scanner saw through before; it is asked only for a point that creates a
   /// voxel. A voxel first hit by such a point (a cart driving along itself, a walker's trail) is
-  /// not structure until it has been hit for explained_min_span_in_free_s.
+  /// not structure until it has been hit for explained_min_span_in_free_s. @p long_free (may be
+  /// empty: never) says whether the scanner has seen through a point's place in many more scans
+  /// than anything was there; it is asked only for a point that hits a voxel unseen for longer
+  /// than explained_max_age_s. Such a voxel is started afresh: what stood there left, and a
+  /// thing that comes back along the same line (a cart driving to and fro, its side sliding along
+  /// itself) is not explained by its own earlier passes.
   void add(const std::vector<char>& keep,
-           const std::function<bool(const Eigen::Vector2d&)>& in_free_space);
+           const std::function<bool(const Eigen::Vector2d&)>& in_free_space,
+           const std::function<bool(const Eigen::Vector2d&)>& long_free = {});
 
   /// Forgets the map and the motion (after a jump in time or of the fixed frame).
   void reset();
 
   std::size_t voxel_count() const { return map_.size(); }
+  /// Voxels started afresh by add() since the start (see its long_free).
+  std::int64_t voxels_restarted() const { return voxels_restarted_; }
   const RegistrationConfig& config() const { return config_; }
 
  private:
@@ -196,6 +204,7 @@ class ScanRegistration {
 
   RegistrationConfig config_;
   IntegerKeyMap<Voxel> map_;
+  std::int64_t voxels_restarted_ = 0;
   std::uint32_t scan_count_ = 0;
   bool have_previous_ = false;
   double previous_stamp_s_ = 0.0;

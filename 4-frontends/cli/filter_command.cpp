@@ -41,7 +41,8 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
   j["events"] = events;
   j["beams_removed"] = {{"dynamic", s.counters.beams_removed_dynamic},
                         {"unknown", s.counters.beams_removed_unknown},
-                        {"fragments", s.counters.beams_removed_fragments}};
+                        {"fragments", s.counters.beams_removed_fragments},
+                        {"edge_pixels", s.counters.beams_removed_edge_pixels}};
   j["beams_kept_long_occupied"] = s.counters.beams_kept_long_occupied;
   j["free_space_refuted"] = s.counters.free_space_refuted;
   j["fragment_follows"] = s.counters.fragment_follows;
@@ -87,6 +88,10 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
                        {"tracks", slow.work.tracks},
                        {"registration_points", slow.work.registration_points},
                        {"registration_iterations", slow.work.registration_iterations},
+                       {"registration_alignments", slow.work.registration_alignments},
+                       {"registration_total_iterations", slow.work.registration_total_iterations},
+                       {"registration_us", slow.work.registration_us},
+                       {"free_space_us", slow.work.free_space_us},
                        {"map_voxels", slow.work.map_voxels},
                        {"free_space_tiles_started", slow.work.free_space_tiles_started}});
   }

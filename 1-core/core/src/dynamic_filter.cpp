@@ -4,12 +4,18 @@
 #include "dispel/core/dynamic_filter.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <utility>
 
 namespace dispel {
 namespace {
+
+double microseconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start)
+      .count();
+}
 
 bool finite_pose(const Pose2& p) {
   return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.yaw_rad);
@@ -154,8 +160,10 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   }
   const bool registering = config_.registration.enabled;
   out.registration = RegistrationReport{};
+  const auto registration_start = std::chrono::steady_clock::now();
   const Pose2 pose =
       registering ? registration_.register_scan(scan, sensor_pose, out.registration) : *sensor_pose;
+  registration_us_ = registering ? microseconds_since(registration_start) : 0.0;
   if (registering) {
     counters_.scans_registered += out.registration.registered ? 1 : 0;
     counters_.registration_fallbacks += out.registration.fallback ? 1 : 0;
@@ -216,6 +224,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
     }
     counters_.map_voxels_restarted += registration_.voxels_restarted() - restarted;
   }
+  if (checked.learn && config_.tracking.remove_edge_pixels) remove_edge_pixels(scan, out);
   ++counters_.events[static_cast<std::size_t>(checked.event)];
   record_work(scan, out);
 }
@@ -227,6 +236,11 @@ void DynamicFilter::record_work(const LaserScan& scan, FilterResult& out) {
   w.tracks = static_cast<std::int32_t>(tracks_.size());
   w.registration_points = out.registration.points;
   w.registration_iterations = out.registration.iterations;
+  w.registration_alignments = out.registration.alignments;
+  w.registration_total_iterations = out.registration.total_iterations;
+  w.registration_us = registration_us_;
+  w.free_space_us = free_space_us_;
+  registration_us_ = free_space_us_ = 0.0;
   w.map_voxels = static_cast<std::int64_t>(registration_.voxel_count());
   w.free_space_tiles_started = free_space_.take_tiles_started();
 }
@@ -542,7 +556,9 @@ void DynamicFilter::classify(const LaserScan& scan, const Pose2& sensor_pose,
   start_tracks(scan.stamp_s);
   if (config_.free_space.enabled) {
     mark_objects_in_free_space(scan, segmentation);
+    const auto free_space_start = std::chrono::steady_clock::now();
     free_space_.add_scan(scan, sensor_pose);
+    free_space_us_ = microseconds_since(free_space_start);
   }
   spread_to_companions();
   verdicts_.resize(observations_.size());
@@ -880,6 +896,46 @@ bool DynamicFilter::near_dynamic_track(const Eigen::Vector2d& point_m, double st
     if (outline.distance(point_m) <= limit) return true;
   }
   return false;
+}
+
+// Beyond the thesis (tracking.remove_edge_pixels): a scanner's beam that grazes an object's edge
+// returns a range between the object and what lies behind it (a mixed pixel), a point in mid-air
+// that is in no object. Beside a removed beam, farther than it and nearer than the beam on its
+// other side, each by more than a tenth of the span between those two, it is removed too, unless
+// the map explains it. This runs after the map has learned the scan, so the registration sees
+// what it saw before the rule: removing the pixels from what the map learns as well moved
+// person_following_outdoor_1 (laser-only) from 0.963 to 0.951 of its background kept.
+void DynamicFilter::remove_edge_pixels(const LaserScan& scan, FilterResult& out) {
+  const std::vector<std::int32_t>& segment_labels = out.segmentation.beam_labels;
+  const auto removed = [&out](std::size_t j) {
+    return out.labels[j] == BeamLabel::kDynamic || out.labels[j] == BeamLabel::kUnknown;
+  };
+  edge_pixels_.clear();
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    if (out.labels[b] != BeamLabel::kNoObject || segment_labels[b] != kLabelNoise) continue;
+    if (!explained_.empty() && explained_[b] != 0) continue;
+    const float r = scan.ranges_m[b];
+    for (const std::size_t side : {b - 1, b + 1}) {  // b - 1 wraps for b = 0: out of range.
+      const std::size_t other = side < b ? b + 1 : b - 1;
+      if (side >= scan.size() || other >= scan.size() || !removed(side) || !scan.is_valid(other))
+        continue;
+      // Clear of both: a beam within a tenth of the span of either side lies on that surface (a
+      // wall seen at a slant, in pieces under N_min, goes on smoothly past an occluder's edge).
+      const float margin = 0.1F * (scan.ranges_m[other] - scan.ranges_m[side]);
+      if (r > scan.ranges_m[side] + margin && r < scan.ranges_m[other] - margin) {
+        edge_pixels_.push_back(b);
+        break;
+      }
+    }
+  }
+  // Decided on the labels before any pixel was removed: a pixel never makes another.
+  for (const std::size_t b : edge_pixels_) {
+    out.labels[b] = BeamLabel::kDynamic;
+    out.filtered.ranges_m[b] = std::numeric_limits<float>::quiet_NaN();
+    ++out.removed_dynamic;
+    ++counters_.beams_removed_dynamic;
+    ++counters_.beams_removed_edge_pixels;
+  }
 }
 
 // Beyond the thesis (tracking.follow_fragments): a dynamic track that no object matched in this

@@ -60,6 +60,7 @@ DynamicFilterConfig thesis_config() {
   c.tracking.companion_distance_m = 0.0;
   c.tracking.fragment_distance_m = 0.0;
   c.tracking.follow_fragments = false;
+  c.tracking.remove_edge_pixels = false;
   // Used by global matching only; the values the thesis preset had when it matched globally.
   c.tracking.max_gate_m = 1.0;
   c.tracking.max_extent_change_m = 0.5;

@@ -58,6 +58,66 @@ TEST(DynamicFilterDefaults, FragmentsBesideADynamicWalkerAreRemovedWithIt) {
   }
 }
 
+TEST(DynamicFilterDefaults, TheMixedPixelAtAWalkersEdgeIsRemovedWithIt) {
+  // A beam that grazes an object's edge returns a range between the object and the wall behind
+  // it: a point in mid-air, in no object. Here the beam past each object's last beam does (a
+  // walker crossing the view at 4 m, a pillar at 5 m; the wall at 10 m). The walker's is removed
+  // with the walker (tracking.remove_edge_pixels); the pillar's is kept, as are the walls.
+  Scenario s;
+  s.walls = room(10.0, 8.0);
+  s.pillars = {{{5.0, 2.5}, 0.3}};
+  s.movers = {walker({4.0, -3.0}, {0.0, 1.0})};
+  for (const bool rule : {false, true}) {
+    DynamicFilterConfig config;
+    config.tracking.remove_edge_pixels = rule;
+    DynamicFilter filter{config};
+    int walker_pixels = 0, walker_pixels_removed = 0, pillar_pixels = 0, others_removed = 0;
+    int all_walker_pixels_removed = 0;
+    for (int k = 0; k < 100; ++k) {
+      Frame f = render(s, k * kPeriod);
+      // The mixed pixel past the last beam of each run of beams on a mover or the pillar.
+      std::vector<std::size_t> pixels;
+      std::vector<bool> on_walker;
+      for (std::size_t b = 1; b + 2 < f.scan.size(); ++b) {
+        const bool walker_edge = f.truth[b] == 1 && f.truth[b + 1] == 0;
+        const bool pillar_edge = f.truth[b] == 0 && f.scan.ranges_m[b] < 6.0F &&
+                                 f.scan.ranges_m[b + 1] > 8.0F && f.scan.ranges_m[b + 2] > 8.0F;
+        if (!walker_edge && !pillar_edge) continue;
+        if (!(f.scan.ranges_m[b + 1] > f.scan.ranges_m[b] + 2.0F)) continue;  // The wall behind.
+        f.scan.ranges_m[b + 1] = 0.5F * (f.scan.ranges_m[b] + f.scan.ranges_m[b + 2]);
+        pixels.push_back(b + 1);
+        on_walker.push_back(walker_edge);
+      }
+      const FilterResult& r = filter.process(f.scan, f.pose);
+      for (std::size_t i = 0; i < pixels.size(); ++i) {
+        const bool removed_pixel = removed(r.labels[pixels[i]]);
+        all_walker_pixels_removed += on_walker[i] && removed_pixel ? 1 : 0;
+        if (!on_walker[i]) {
+          ++pillar_pixels;
+          EXPECT_FALSE(removed_pixel) << "the pillar's, scan " << k;
+        } else if (k >= 40) {  // The walker is removed from scan 40 on (its own test).
+          ++walker_pixels;
+          walker_pixels_removed += removed_pixel ? 1 : 0;
+        }
+      }
+      for (std::size_t b = 0; b < f.truth.size(); ++b) {
+        const bool pixel = std::find(pixels.begin(), pixels.end(), b) != pixels.end();
+        if (f.truth[b] == 0 && !pixel && removed(r.labels[b])) ++others_removed;
+      }
+    }
+    ASSERT_GT(walker_pixels, 40);
+    ASSERT_GT(pillar_pixels, 50);
+    EXPECT_EQ(others_removed, 0);
+    if (rule) {
+      EXPECT_GE(walker_pixels_removed, 0.9 * walker_pixels) << walker_pixels;
+      EXPECT_EQ(filter.counters().beams_removed_edge_pixels, all_walker_pixels_removed);
+    } else {
+      EXPECT_EQ(walker_pixels_removed, 0);
+      EXPECT_EQ(filter.counters().beams_removed_edge_pixels, 0);
+    }
+  }
+}
+
 TEST(DynamicFilterDefaults, AWalkerGoneTooFarForNminStaysFollowedAndRemoved) {
   // A leg 12 cm across walks away across the room: from 2.8 m (14 beams) to 10.4 m (4 beams),
   // under N_min (8) beyond 5 m. Once dynamic, its track follows the beams of no object beside it

@@ -411,6 +411,7 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
 Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double threshold,
                               SeedNoise noise, RegistrationReport& report) {
   Pose2 pose = seed;
+  ++alignments_;
   // Candidates: the points of the voxels around each sample point at the seed (see
   // nearest_candidate()). A young map (the first scans, or a scene that has just changed) has
   // no structure yet: when fewer than min_points sample points have a candidate in structure,
@@ -534,6 +535,7 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
     pose.y_m += step.y();
     pose.yaw_rad = wrap_angle(pose.yaw_rad + step.z());
     report.iterations = iteration + 1;
+    ++total_iterations_;
     // Converged: a step of 1 mm and 0.1 mrad is far below the returns' noise. (1e-4 and 1e-5
     // ran to max_iterations on most scans, the Geman-McClure weights and the correspondences
     // trading places at that scale.)
@@ -568,6 +570,7 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
                                       const std::optional<Pose2>& odometry_pose,
                                       RegistrationReport& report) {
   report = RegistrationReport{};
+  alignments_ = total_iterations_ = 0;
   ++scan_count_;
   explaining_valid_ = false;
   const double dt = have_previous_ ? scan.stamp_s - previous_stamp_s_ : 0.0;
@@ -690,6 +693,8 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
                        a * moved.yaw_rad / dt + (1.0 - a) * velocity_per_s_.yaw_rad};
     velocity_per_s_initialised_ = true;
   }
+  report.alignments = alignments_;
+  report.total_iterations = total_iterations_;
   previous_pose_ = pose;
   previous_stamp_s_ = scan.stamp_s;
   previous_odometry_ = odometry_pose;

@@ -199,7 +199,7 @@ TEST(ScanRegistration, AWheelThatSlipsDoesNotTurnTheMap) {
   ScanRegistration reg{RegistrationConfig{}};
   std::size_t sensor = 0;
   Pose2 previous_odometry, slipped;
-  int overruled = 0, k = 0;
+  int overruled = 0, k = 0, more_alignments = 0;
   Pose2 first_estimate, first_truth, estimate, truth;
   for (const sim::ScanFrame& f : out.scans) {
     while (sensor + 1 < out.sensors.size() && out.sensors[sensor + 1].stamp_s <= f.scan.stamp_s)
@@ -217,11 +217,18 @@ TEST(ScanRegistration, AWheelThatSlipsDoesNotTurnTheMap) {
     }
     reg.add(std::vector<char>(f.scan.size(), 1), {});
     overruled += report.odometry_overruled ? 1 : 0;
+    if (report.odometry_overruled) {
+      EXPECT_GE(report.alignments, 2);  // The odometry's seed and the guess's, at least.
+      EXPECT_GT(report.total_iterations, report.iterations);
+    }
+    more_alignments += report.alignments > 1 ? 1 : 0;
     ++k;
   }
   const Pose2 moved_estimate = first_estimate.inverse() * estimate;
   const Pose2 moved_truth = first_truth.inverse() * truth;
   EXPECT_GE(overruled, 1);
+  EXPECT_GE(more_alignments, overruled);
+  EXPECT_LT(more_alignments, k / 4);  // Most scans are aligned once.
   EXPECT_LT(std::abs(wrap_angle(moved_estimate.yaw_rad - moved_truth.yaw_rad)), 1.0 * kDeg);
   EXPECT_LT((moved_estimate.translation() - moved_truth.translation()).norm(), 0.3);
   const Pose2 odometry_moved = Pose2{}.inverse() * slipped;  // The odometry starts at the origin.

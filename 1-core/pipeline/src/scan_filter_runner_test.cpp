@@ -167,6 +167,14 @@ TEST(ScanFilterRunner, EachScanSaysWhatItCostAndWhatItDid) {
     EXPECT_EQ(r.work.tracks, static_cast<std::int32_t>(r.tracks.size()));
     EXPECT_EQ(r.work.registration_points, r.registration.points);
     EXPECT_EQ(r.work.registration_iterations, r.registration.iterations);
+    EXPECT_EQ(r.work.registration_alignments, r.registration.alignments);
+    EXPECT_EQ(r.work.registration_total_iterations, r.registration.total_iterations);
+    EXPECT_GE(r.work.registration_total_iterations, r.work.registration_iterations);
+    EXPECT_GT(r.work.registration_us, 0.0);  // The registration ran for every scan.
+    EXPECT_GT(r.work.free_space_us, 0.0);
+    if (k > 0) {
+      EXPECT_GE(r.registration.alignments, 1);  // Every scan after the first is aligned.
+    }
     // The first scan empties the free-space tiles the room's beams reach; a scanner that stays
     // put needs few more (a registered pose that moves by millimetres reaches a tile at the
     // room's edge now and then).

@@ -151,6 +151,7 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   b.number("tracking.companion_speed_difference_mps", t.companion_speed_difference_mps);
   b.number("tracking.fragment_distance_m", t.fragment_distance_m);
   b.boolean("tracking.follow_fragments", t.follow_fragments);
+  b.boolean("tracking.remove_edge_pixels", t.remove_edge_pixels);
   VelocityFilterConfig& v = c.velocity;
   b.section("velocity");
   b.number("velocity.position_variance_m2", v.position_variance_m2);

@@ -38,6 +38,7 @@ void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d
   EXPECT_EQ(loaded.tracking.fragment_distance_m, d.tracking.fragment_distance_m);
   EXPECT_EQ(loaded.tracking.inherit_on_split, d.tracking.inherit_on_split);
   EXPECT_EQ(loaded.tracking.follow_fragments, d.tracking.follow_fragments);
+  EXPECT_EQ(loaded.tracking.remove_edge_pixels, d.tracking.remove_edge_pixels);
   EXPECT_EQ(loaded.tracking.companion_speed_difference_mps,
             d.tracking.companion_speed_difference_mps);
   EXPECT_EQ(loaded.velocity.position_variance_m2, d.velocity.position_variance_m2);
@@ -94,6 +95,7 @@ TEST(ConfigYaml, ShippedThesisFileHoldsExactlyTheThesisParameters) {
   EXPECT_EQ(t.tracking.matching, Matching::kNearestNeighbour);
   EXPECT_FALSE(t.tracking.inherit_on_split);
   EXPECT_FALSE(t.tracking.follow_fragments);
+  EXPECT_FALSE(t.tracking.remove_edge_pixels);
   EXPECT_EQ(t.segmentation.gap_metric, GapMetric::kRangeDifference);
   EXPECT_FALSE(t.classification.slow_scans_reduce_dynamic_weight);
   EXPECT_EQ(t.classification.still_scans_to_static, 0);

@@ -212,7 +212,7 @@ TEST(SimPipeline, ARunThatWouldNotFitOnTheDiskIsRefusedBeforeAnyWork) {
 // off-centre and yawed, beams over the sweep, drifting odometry: the walls that slide along the
 // robot as it passes them used to become "walkers" (preservation 0.895 on seed 1 before the
 // registration and the map's explanation; 0.41 on a real robot). Seed 1, the whole minute:
-// measured 0.998 kept and 0.80 removed (0.993 and 0.82 before the simulated robot rounded its
+// measured 0.998 kept and 0.83 removed (0.993 and 0.82 before the simulated robot rounded its
 // corners; the targets are 0.995 and 0.90: the rejection target is not reached,
 // docs/results.md).
 // A shipped moving scenario, seed 1, simulated, filtered with dispel's default scaled to its
@@ -252,7 +252,8 @@ TEST(SimPipeline, DrivingRobotAlongRoughCorridorsKeepsItsWalls) {
 // at 10-11 m, in pieces kept as static. The registered map learned its trail, and the cart's
 // side was then explained by its own earlier passes and kept (1838 of its 3817 beams removed;
 // 0.52 of all moving beams, 0.9990 of the static ones kept). A voxel hit again where the scanner
-// has long seen through is now started afresh: measured 2309 of the cart's, 0.605 and 0.9997.
+// has long seen through is now started afresh: measured 2309 of the cart's, 0.605 and 0.9997
+// (with the mixed pixels at removed edges removed too, tracking.remove_edge_pixels: 2372, 0.631).
 // The target (0.90 removed) is not reached.
 TEST(SimPipeline, AWarehouseCartIsNotExplainedByItsOwnEarlierPasses) {
   const FilteredScenario aisles = simulate_and_filter("warehouse_aisles");
@@ -265,7 +266,7 @@ TEST(SimPipeline, AWarehouseCartIsNotExplainedByItsOwnEarlierPasses) {
 // people crossing it far from the robot. The default keeps the clutter (it never moves) and
 // misses many of the walkers: they are legs of 2-3 beams at 5-10 m, under N_min, and only those
 // first seen nearer are followed out there through their fragments (measured over five seeds:
-// 0.9995 kept, 0.63 removed; 0.38 before they were followed). N_min falling with range removes
+// 0.9994 kept, 0.63 removed; 0.38 before they were followed). N_min falling with range removes
 // them (0.9993, 0.92 before) but is off by default: on real recordings it removes far clutter
 // (docs/dynamic_filter.md).
 TEST(SimPipeline, AnOpenClutteredHallKeepsItsClutterAndFarWalkersNeedNminByWidth) {
@@ -287,7 +288,7 @@ TEST(SimPipeline, AnOpenClutteredHallKeepsItsClutterAndFarWalkersNeedNminByWidth
     removed[with_width] = r.rejection_rate();
     std::remove(o.output.c_str());
   }
-  EXPECT_LT(removed[0], 0.75);  // Measured 0.60 (0.36 before dynamic tracks followed fragments).
+  EXPECT_LT(removed[0], 0.75);  // Measured 0.62 (0.36 before dynamic tracks followed fragments).
   EXPECT_GE(removed[1], 0.85);  // Measured 0.95 (0.92 before).
   EXPECT_GT(removed[1] - removed[0], 0.15);
   std::remove(bag.c_str());

@@ -68,6 +68,9 @@ struct FilterCounters {
   /// Beams of no object removed as fragments of a dynamic track (tracking.fragment_distance_m);
   /// included in beams_removed_dynamic.
   std::int64_t beams_removed_fragments = 0;
+  /// Beams of no object removed as the mixed pixels at a removed object's edge
+  /// (tracking.remove_edge_pixels); included in beams_removed_dynamic.
+  std::int64_t beams_removed_edge_pixels = 0;
   /// Scans in which a dynamic track was followed through fragments (tracking.follow_fragments),
   /// summed over the tracks.
   std::int64_t fragment_follows = 0;
@@ -114,7 +117,13 @@ struct ScanWork {
   std::int32_t objects = 0;  ///< Segmented objects.
   std::int32_t tracks = 0;   ///< Live tracks after the scan.
   std::int32_t registration_points = 0;
-  std::int32_t registration_iterations = 0;
+  std::int32_t registration_iterations = 0;  ///< Of the alignment kept.
+  std::int32_t registration_alignments = 0;  ///< Alignments tried (RegistrationReport).
+  std::int32_t registration_total_iterations = 0;
+  /// Wall time of the scan's registration and of adding it to the free-space map (steady clock;
+  /// 0 when off): where a slow scan's time went.
+  double registration_us = 0.0;
+  double free_space_us = 0.0;
   std::int64_t map_voxels = 0;                ///< The registration's local map after the scan.
   std::int64_t free_space_tiles_started = 0;  ///< Free-space tiles emptied for this scan.
 };
@@ -266,6 +275,7 @@ class DynamicFilter {
                        bool learned);
   bool near_dynamic_track(const Eigen::Vector2d& point_m, double stamp_s) const;
   void follow_fragments(const LaserScan& scan, const Segmentation& segmentation);
+  void remove_edge_pixels(const LaserScan& scan, FilterResult& out);
   void write_tracks(FilterResult& out) const;
 
   DynamicFilterConfig config_;
@@ -273,6 +283,8 @@ class DynamicFilter {
   FilterCounters counters_;
   std::vector<Track> tracks_;
   FreeSpaceMap free_space_;
+  double registration_us_ = 0.0;  // This scan's stage times (ScanWork).
+  double free_space_us_ = 0.0;
   ScanRegistration registration_;
   std::vector<char> explained_;                // Per beam of this scan (registration on).
   BeamDirections directions_;                  // The scanner's beam directions.
@@ -302,6 +314,7 @@ class DynamicFilter {
   std::vector<double> points_needed_;         // the points in free space that would mark it,
   std::vector<std::int32_t> points_in_free_;  // and those found.
   std::vector<char> keep_;                    // Scratch: beams the map learns.
+  std::vector<std::size_t> edge_pixels_;      // Scratch: remove_edge_pixels().
   std::optional<Pose2> previous_input_pose_;  // The pose given with the previous scan.
   std::uint64_t next_id_ = 1;
   bool have_previous_ = false;

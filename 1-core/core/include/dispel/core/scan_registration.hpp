@@ -92,8 +92,12 @@ struct RegistrationReport {
   /// Times the scan was de-skewed by its registered turn and aligned again: the turn it was first
   /// de-skewed by (the odometry's, or the guess's) bent it (a slip starts or ends within a scan).
   std::int32_t realignments = 0;
-  std::int32_t points = 0;  ///< Points of the thinned scan.
-  std::int32_t iterations = 0;
+  std::int32_t points = 0;      ///< Points of the thinned scan.
+  std::int32_t iterations = 0;  ///< Of the alignment kept.
+  /// Alignments tried for the scan (the odometry's seed, the guess's after a slip, realignments)
+  /// and their iterations together: the registration's work.
+  std::int32_t alignments = 0;
+  std::int32_t total_iterations = 0;
   double inlier_share = 0.0;  ///< Share of the points with a correspondence.
   double residual_m = 0.0;    ///< RMS point-to-line distance of the inliers.
   double degeneracy = 0.0;    ///< Weakest / strongest translation information (0..1).
@@ -222,6 +226,8 @@ class ScanRegistration {
   std::vector<Eigen::Vector2d> world_points_;  // Per beam, in the fixed frame.
   BeamDirections directions_;                  // The scanner's beam directions.
   std::vector<std::int32_t> sample_;           // Beams used for registration.
+  std::int32_t alignments_ = 0;                // This scan's, all tried (report.alignments).
+  std::int32_t total_iterations_ = 0;
   bool map_normals_ = false;  // The scan has odometry: map points get map_normal() (see align()).
   // The alignment's candidates (see nearest_candidate()): each sample point at the seed, the
   // voxels around it, how far, and whether only structure counts.

@@ -62,11 +62,11 @@ struct TrackingConfig {
   /// walked for 2.5 s along small static things. false: off (the thesis has no such rule).
   bool follow_fragments = true;
   /// A beam of no object beside a removed beam, farther than it and nearer than the beam on its
-  /// other side (each by more than a tenth of the span between them), is removed with it: the mixed pixel at a moving object's edge (a return between
-  /// the object and what lies behind it), a point in mid-air that moves with the walker. A few of
-  /// them kept in every scan were what a SLAM engine locked onto in a corridor. Not when the map
-  /// explains it. Applied after the map has learned the scan. false: off (the thesis keeps every
-  /// beam of no object).
+  /// other side (each by more than a tenth of the span between them), is removed with it: the
+  /// mixed pixel at a moving object's edge (a return between the object and what lies behind it),
+  /// a point in mid-air that moves with the walker. A few of them kept in every scan were what a
+  /// SLAM engine locked onto in a corridor. Not when the map explains it. Applied after the map
+  /// has learned the scan. false: off (the thesis keeps every beam of no object).
   bool remove_edge_pixels = true;
 
   /// Throws std::invalid_argument naming the first bad field and its value.

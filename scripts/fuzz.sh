@@ -45,6 +45,30 @@ build_targets=()
 for t in "${targets[@]}"; do build_targets+=(--target "fuzz_$t"); done
 cmake --build "$build" -j"$(nproc)" "${build_targets[@]}"
 
+# How long past its -max_total_time a run may go before it is a hang: libFuzzer's wrap-up (the
+# final merge of fork mode, a last input of up to -timeout=10 s) takes seconds; 120 s more covers
+# a machine busy with the other target and CI's other work.
+overrun_limit=${FUZZ_OVERRUN_LIMIT:-120}
+
+# watchdog PID SECONDS REPORT: after SECONDS, if the process group PID (setsid) still runs,
+# writes the stacks of its processes to REPORT and kills the group.
+watchdog() {
+  local pid=$1 limit=$2 report=$3 p
+  sleep "$limit"
+  kill -0 "$pid" 2>/dev/null || return 0
+  {
+    echo "fuzz.sh: still running ${limit} s after it started; the stacks of process group $pid:"
+    for p in $(pgrep -g "$pid"); do
+      echo "--- process $p: $(tr '\0' ' ' </proc/"$p"/cmdline 2>/dev/null | cut -c1-200)"
+      if command -v gdb >/dev/null; then
+        timeout 60 gdb -p "$p" -batch -nx -ex 'thread apply all bt 30' 2>&1 | grep -E '^(#|Thread)' || true
+      fi
+    done
+  } >"$report.partial" 2>&1
+  mv "$report.partial" "$report"
+  kill -KILL -- -"$pid" 2>/dev/null || true
+}
+
 # One target's run; its summary line goes to build-fuzz/result_<target> ("<target>: ok, ..." or
 # "<target>: FAILED ...").
 fuzz_one() {
@@ -88,13 +112,35 @@ fuzz_one() {
   # that what the code does with that null is seen (MRPT's matrices wrote through it); a `new` it
   # cannot serve still aborts (ASan's), where outside ASan it throws std::bad_alloc. One above
   # 4 GiB that it can serve is libFuzzer's out-of-memory (-rss_limit_mb).
+  # The fuzzer runs in its own process group (setsid), fork mode's children with it, under a
+  # watchdog: libFuzzer ends a run at -max_total_time only between inputs, and waits for fork
+  # mode's jobs, so a run that hangs where its own timeout does not fire would hold CI until CI's
+  # own limit (stop 40's run did: no result line after 90 minutes). One still going
+  # $overrun_limit s after its time is stopped: the stacks of its processes go to
+  # build-fuzz/hang_<target>.txt (gdb), the group is killed, and the target fails, naming the hang.
   ASAN_OPTIONS=abort_on_error=0:detect_leaks=1:allocator_may_return_null=1 \
     UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-    "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
+    setsid "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
     -max_len="${max_len[$t]}" -artifact_prefix="$artifacts/" -print_final_stats=1 \
-    "${dict[@]}" "${options[@]}" "$corpus" >"$log" 2>&1 || rc=$?
+    "${dict[@]}" "${options[@]}" "$corpus" >"$log" 2>&1 &
+  local fuzzer=$!
+  local hang=$build/hang_$t.txt
+  rm -f "$hang"
+  watchdog "$fuzzer" $((seconds + overrun_limit)) "$hang" >/dev/null 2>&1 </dev/null &
+  local dog=$!
+  wait "$fuzzer" || rc=$?
+  pkill -P "$dog" 2>/dev/null || true
+  kill "$dog" 2>/dev/null || true
+  wait "$dog" 2>/dev/null || true
+  if [ -f "$hang" ]; then
+    runs=$(grep -oE '^#[0-9]+' "$log" | tail -1 | tr -d '#' || true)
+    echo "$t: FAILED after ${runs:-?} runs: still running $((seconds + overrun_limit)) s after it started, its time $seconds s (a hang; the stacks of its processes: $hang)" >"$result"
+    tail -n 20 "$log" >&2
+    cat "$hang" >&2
+    return
+  fi
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
-  [ -n "$runs" ] || runs=$(grep -o '#[0-9]*' "$log" | tail -1 | tr -d '#' || true)
+  [ -n "$runs" ] || runs=$(grep -oE '^#[0-9]+' "$log" | tail -1 | tr -d '#' || true)
   # With -ignore_crashes=1 the run goes on after a crash, but only one kind of crash is ignored:
   # an allocation ASan's allocator cannot make (it aborts where the process would get
   # std::bad_alloc). Each crash input is replayed; one of that kind is renamed oom-asan-*, any

@@ -30,6 +30,8 @@ packages=(
                                        # its cross-vendor test: Fast DDS, and fastddsgen (Java)
                                        # for the message types
   clang libclang-rt-14-dev             # scripts/fuzz.sh: libFuzzer, ASan, UBSan (build-fuzz/)
+  procps gdb                           # scripts/fuzz.sh's watchdog: a hung run's processes
+                                       # (pgrep) and their stacks
 )
 
 missing=()

@@ -55,6 +55,7 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
                        {"without_odometry", s.counters.scans_without_odometry},
                        {"odometry_overruled", s.counters.odometry_overruled},
                        {"realigned", s.counters.scans_realigned},
+                       {"guess_limited", s.counters.registration_guess_limited},
                        {"voxels_restarted", s.counters.map_voxels_restarted},
                        {"residual_m",
                         {{"median", percentile(s.registration_residual_m, 0.5)},

@@ -133,13 +133,15 @@ DynamicFilter::DynamicFilter(DynamicFilterConfig config)
     : config_((config.validate(), std::move(config))),
       segmenter_(config_.segmentation),
       free_space_(config_.free_space),
-      registration_(config_.registration) {}
+      registration_(config_.registration,
+                    SpeedLimits{config_.max_speed_mps, config_.max_turn_rate_radps}) {}
 
 DynamicFilter::DynamicFilter(DynamicFilterConfig config, FreeSpaceMap&& free_space)
     : config_((config.validate(), std::move(config))),
       segmenter_(config_.segmentation),
       free_space_(config_.free_space, std::move(free_space)),
-      registration_(config_.registration) {}
+      registration_(config_.registration,
+                    SpeedLimits{config_.max_speed_mps, config_.max_turn_rate_radps}) {}
 
 void DynamicFilter::reset() {
   counters_.tracks_dropped += static_cast<std::int64_t>(tracks_.size());
@@ -171,6 +173,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
     counters_.scans_without_odometry += sensor_pose ? 0 : 1;
     counters_.odometry_overruled += out.registration.odometry_overruled ? 1 : 0;
     counters_.scans_realigned += out.registration.realignments > 0 ? 1 : 0;
+    counters_.registration_guess_limited += out.registration.guess_limited ? 1 : 0;
   }
   out.sensor_pose = pose;
   previous_input_pose_ = sensor_pose;

@@ -102,8 +102,8 @@ void RegistrationConfig::validate() const {
     reject("registration.explained_distance_m", explained_distance_m, "in (0, voxel_size_m]");
 }
 
-ScanRegistration::ScanRegistration(RegistrationConfig config)
-    : config_((config.validate(), config)) {}
+ScanRegistration::ScanRegistration(RegistrationConfig config, SpeedLimits limits)
+    : config_((config.validate(), config)), limits_(limits) {}
 
 void ScanRegistration::reset() {
   map_.clear();
@@ -692,6 +692,16 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
                        a * moved.y_m / dt + (1.0 - a) * velocity_per_s_.y_m,
                        a * moved.yaw_rad / dt + (1.0 - a) * velocity_per_s_.yaw_rad};
     velocity_per_s_initialised_ = true;
+    // Within what the robot can do (SpeedLimits).
+    const double speed = velocity_per_s_.translation().norm();
+    report.guess_limited =
+        speed > limits_.speed_mps || std::abs(velocity_per_s_.yaw_rad) > limits_.turn_rate_radps;
+    if (speed > limits_.speed_mps) {
+      velocity_per_s_.x_m *= limits_.speed_mps / speed;
+      velocity_per_s_.y_m *= limits_.speed_mps / speed;
+    }
+    velocity_per_s_.yaw_rad =
+        std::clamp(velocity_per_s_.yaw_rad, -limits_.turn_rate_radps, limits_.turn_rate_radps);
   }
   report.alignments = alignments_;
   report.total_iterations = total_iterations_;

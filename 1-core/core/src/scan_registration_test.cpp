@@ -344,6 +344,45 @@ TEST(ScanRegistration, ReturnsFarFromTheSeedStillFindTheirCorrespondences) {
               report.points, report.inlier_share);
 }
 
+// The scanner still for six scans, then driving 0.3 m a scan of 0.1 s (3 m/s) past the posts,
+// then a scan with nothing in it (it falls back to the constant-velocity guess). On a robot that
+// can drive 1 m/s the guess never exceeds that (counted), so the empty scan moves the pose by at
+// most 0.1 m; on one that can drive 5 m/s the guess follows the registered motion. Without the
+// limit, a poorly registered scene taught the guess 15-34 m/s, and every fallback carried it on.
+TEST(ScanRegistration, TheConstantVelocityGuessStaysWithinWhatTheRobotCanDo) {
+  for (const double limit_mps : {1.0, 5.0}) {
+    ScanRegistration reg{RegistrationConfig{}, SpeedLimits{limit_mps, 3.0}};
+    RegistrationReport report;
+    double t = 0.0;
+    for (int k = 0; k < 6; ++k, t += 0.1) {
+      reg.register_scan(posts_scan(Pose2{}, t), std::nullopt, report);
+      reg.add(std::vector<char>(720, 1), {});
+    }
+    int limited = 0;
+    Pose2 p;
+    for (int k = 1; k <= 4; ++k, t += 0.1) {
+      const Pose2 truth{0.3 * k, 0.0, 0.0};
+      p = reg.register_scan(posts_scan(truth, t), std::nullopt, report);
+      EXPECT_TRUE(report.registered) << limit_mps << " " << k;
+      EXPECT_LT((p.translation() - truth.translation()).norm(), 0.02) << limit_mps << " " << k;
+      limited += report.guess_limited ? 1 : 0;
+      reg.add(std::vector<char>(720, 1), {});
+    }
+    LaserScan empty = posts_scan(Pose2{}, t);
+    std::fill(empty.ranges_m.begin(), empty.ranges_m.end(), std::numeric_limits<float>::infinity());
+    const Pose2 q = reg.register_scan(empty, std::nullopt, report);
+    EXPECT_TRUE(report.fallback);
+    const double step_m = (q.translation() - p.translation()).norm();
+    if (limit_mps < 3.0) {
+      EXPECT_GE(limited, 3);
+      EXPECT_LE(step_m, 0.1 + 1e-9);
+    } else {
+      EXPECT_EQ(limited, 0);
+      EXPECT_GT(step_m, 0.2);
+    }
+  }
+}
+
 // Something seen for a second is structure that explains its own beams. Unseen for 2 s, it is
 // seen again: when the scanner has long seen through its place meanwhile (long_free), what stood
 // there left, and what is there now (a cart back on its track) is a newcomer, its voxels started

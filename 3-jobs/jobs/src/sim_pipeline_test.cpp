@@ -28,9 +28,9 @@ std::string scenario_path(const std::string& name) {
 }
 
 TEST(ScenarioYaml, ShippedScenariosLoadAndValidate) {
-  for (const char* name :
-       {"thesis_hall", "empty_hall", "busy_corridor", "warehouse_forklift", "office_corridors",
-        "warehouse_aisles", "office_corridors_slam", "cluttered_hall", "office_revisits"}) {
+  for (const char* name : {"thesis_hall", "empty_hall", "busy_corridor", "warehouse_forklift",
+                           "office_corridors", "warehouse_aisles", "office_corridors_slam",
+                           "cluttered_hall", "office_revisits", "person_following"}) {
     const sim::Scenario s = load_scenario(scenario_path(name));
     EXPECT_EQ(s.name, name);
   }

@@ -81,13 +81,16 @@ struct FilterCounters {
   /// (odometry or constant velocity), registered scans with an unconstrained direction, and
   /// scans registered without odometry, and scans registered from the constant-velocity guess
   /// because the odometry slipped (RegistrationReport::odometry_overruled), and scans de-skewed
-  /// by their registered turn and aligned again (RegistrationReport::realignments).
+  /// by their registered turn and aligned again (RegistrationReport::realignments), and scans
+  /// after which the constant-velocity guess was held at the robot's limits
+  /// (RegistrationReport::guess_limited).
   std::int64_t scans_registered = 0;
   std::int64_t registration_fallbacks = 0;
   std::int64_t registration_degenerate = 0;
   std::int64_t scans_without_odometry = 0;
   std::int64_t odometry_overruled = 0;
   std::int64_t scans_realigned = 0;
+  std::int64_t registration_guess_limited = 0;
   /// Voxels of the registered map started afresh: hit again after a time unseen where the
   /// scanner had long seen through (ScanRegistration::add()).
   std::int64_t map_voxels_restarted = 0;

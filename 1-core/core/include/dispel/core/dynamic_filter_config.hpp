@@ -94,7 +94,8 @@ struct DynamicFilterConfig {
   /// the time between them (max_speed_mps, max_turn_rate_radps) by more than max_pose_jump_m or
   /// max_pose_jump_rad is a jump of the fixed frame (odometry reset, relocalisation), not motion:
   /// the tracks are reset. (A fixed limit reset a scanner at 4 Hz on a robot at 1.3 m/s at every
-  /// other scan.)
+  /// other scan.) The registration's constant-velocity guess is held within the same limits
+  /// (SpeedLimits).
   double max_pose_jump_m = 0.5;
   double max_pose_jump_rad = 0.5;
   double max_speed_mps = 3.0;

@@ -89,6 +89,9 @@ struct RegistrationReport {
   /// The odometry's motion and the constant-velocity guess parted (a wheel slipped), and the
   /// guess matched clearly more of the scan: registered from the guess.
   bool odometry_overruled = false;
+  /// The constant-velocity guess, brought up to date with this scan's motion, was faster than the
+  /// robot can drive (SpeedLimits) and was held at the limit.
+  bool guess_limited = false;
   /// Times the scan was de-skewed by its registered turn and aligned again: the turn it was first
   /// de-skewed by (the odometry's, or the guess's) bent it (a slip starts or ends within a scan).
   std::int32_t realignments = 0;
@@ -105,11 +108,21 @@ struct RegistrationReport {
   Pose2 correction;           ///< Registered pose relative to the seed.
 };
 
+/// What the robot can do (DynamicFilterConfig::max_speed_mps, max_turn_rate_radps): the
+/// constant-velocity guess is held within them. With little structure (a narrow view outdoors, a
+/// person walking ahead) the registered motion is poor, and the guess, which every fallback
+/// carries on unchanged, ran away: up to 15-34 m/s on a real robot following a walker at about
+/// 1.3 m/s (person_following_outdoor_1, docs/results.md).
+struct SpeedLimits {
+  double speed_mps = 3.0;
+  double turn_rate_radps = 3.0;
+};
+
 /// Registers scans to a local map and says which points it explains. Feed scans in time order;
 /// after labelling, add() the beams that stay static. Not thread-safe.
 class ScanRegistration {
  public:
-  explicit ScanRegistration(RegistrationConfig config);
+  explicit ScanRegistration(RegistrationConfig config, SpeedLimits limits = {});
 
   /// Registers @p scan. @p odometry_pose is the sensor in the odometry frame at the scan's stamp
   /// (std::nullopt: none; the motion is guessed from the last two registered poses). Returns the
@@ -207,6 +220,7 @@ class ScanRegistration {
   Eigen::Vector2d map_normal(const Voxel& voxel, std::uint8_t slot);
 
   RegistrationConfig config_;
+  SpeedLimits limits_;
   IntegerKeyMap<Voxel> map_;
   std::int64_t voxels_restarted_ = 0;
   std::uint32_t scan_count_ = 0;

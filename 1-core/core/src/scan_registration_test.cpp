@@ -348,7 +348,7 @@ TEST(ScanRegistration, ReturnsFarFromTheSeedStillFindTheirCorrespondences) {
 // then a scan with nothing in it (it falls back to the constant-velocity guess). On a robot that
 // can drive 1 m/s the guess never exceeds that (counted), so the empty scan moves the pose by at
 // most 0.1 m; on one that can drive 5 m/s the guess follows the registered motion. Without the
-// limit, a poorly registered scene taught the guess 15-34 m/s, and every fallback carried it on.
+// limit, a poorly registered scene taught the guess up to 34 m/s, and every fallback carried it on.
 TEST(ScanRegistration, TheConstantVelocityGuessStaysWithinWhatTheRobotCanDo) {
   for (const double limit_mps : {1.0, 5.0}) {
     ScanRegistration reg{RegistrationConfig{}, SpeedLimits{limit_mps, 3.0}};

@@ -111,8 +111,8 @@ struct RegistrationReport {
 /// What the robot can do (DynamicFilterConfig::max_speed_mps, max_turn_rate_radps): the
 /// constant-velocity guess is held within them. With little structure (a narrow view outdoors, a
 /// person walking ahead) the registered motion is poor, and the guess, which every fallback
-/// carries on unchanged, ran away: up to 15-34 m/s on a real robot following a walker at about
-/// 1.3 m/s (person_following_outdoor_1, docs/results.md).
+/// carries on unchanged, ran away: up to 34 m/s on a real robot following a walker at about
+/// 1.5 m/s (person_following_outdoor_1, docs/results.md).
 struct SpeedLimits {
   double speed_mps = 3.0;
   double turn_rate_radps = 3.0;

@@ -694,9 +694,9 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
     velocity_per_s_initialised_ = true;
     // Within what the robot can do (SpeedLimits).
     const double speed = velocity_per_s_.translation().norm();
-    report.guess_limited =
-        speed > limits_.speed_mps || std::abs(velocity_per_s_.yaw_rad) > limits_.turn_rate_radps;
-    if (speed > limits_.speed_mps) {
+    const bool too_fast = speed > limits_.speed_mps;
+    report.guess_limited = too_fast || std::abs(velocity_per_s_.yaw_rad) > limits_.turn_rate_radps;
+    if (too_fast) {
       velocity_per_s_.x_m *= limits_.speed_mps / speed;
       velocity_per_s_.y_m *= limits_.speed_mps / speed;
     }

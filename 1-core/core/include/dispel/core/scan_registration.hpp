@@ -125,9 +125,10 @@ class ScanRegistration {
   explicit ScanRegistration(RegistrationConfig config, SpeedLimits limits = {});
 
   /// Registers @p scan. @p odometry_pose is the sensor in the odometry frame at the scan's stamp
-  /// (std::nullopt: none; the motion is guessed from the last two registered poses). Returns the
-  /// sensor's pose in the registration's fixed frame (the odometry frame at the first scan, or
-  /// the first scan's sensor frame when there is no odometry). Fills the scan's points in that
+  /// (std::nullopt: none; the motion is guessed: the registered motion per second, smoothed,
+  /// within SpeedLimits). Returns the sensor's pose in the registration's fixed frame (the
+  /// odometry frame at the first scan, or the first scan's sensor frame when there is no
+  /// odometry). Fills the scan's points in that
   /// frame (points(): one per beam, de-skewed; NaN for invalid beams).
   Pose2 register_scan(const LaserScan& scan, const std::optional<Pose2>& odometry_pose,
                       RegistrationReport& report);

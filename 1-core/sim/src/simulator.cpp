@@ -142,9 +142,51 @@ class OdometrySensors {
   Pose2 odom_;
 };
 
+// Distance from p to the segment from a to b (to a when they coincide).
+double distance_to_segment(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                           const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double t =
+      ab.squaredNorm() > 0.0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).norm();
+}
+
+// Distance from p to the path through @p points (to the point itself when there is one).
+double distance_to_path(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& points,
+                        bool closed) {
+  double best = std::numeric_limits<double>::infinity();
+  const std::size_t n = points.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d& b = i + 1 < n ? points[i + 1] : (closed ? points[0] : points[i]);
+    best = std::min(best, distance_to_segment(p, points[i], b));
+  }
+  return best;
+}
+
+// How far a walker's legs reach either side of the line it walks (ActorState: 0.1 m, and a leg's
+// radius of 0.06 m), and the least gap it leaves when it passes something.
+constexpr double kPersonReach_m = 0.16;
+constexpr double kPassingGap_m = 0.05;
+
+// Whether a circle at @p center of @p radius leaves every actor's path room to pass: people and
+// carts go past furniture, not through it.
+bool clear_of_actors(const Eigen::Vector2d& center, double radius,
+                     const std::vector<Actor>& actors) {
+  for (const Actor& a : actors) {
+    const double reach = a.kind == ActorKind::kPerson ? kPersonReach_m : 0.5 * a.width_m;
+    if (distance_to_path(center, a.waypoints, a.loop) < radius + reach + kPassingGap_m) {
+      return false;
+    }
+  }
+  return true;
+}
+
 // Walls as a real building has them (RoughWalls): pieces set back or forward, joined by steps;
-// glass pieces left out; doors as gaps with a recess; pairs of furniture legs in front.
-void add_rough_wall(const Segment& wall, const RoughWalls& rw, std::mt19937_64& rng, World& out) {
+// glass pieces left out; doors as gaps with a recess; pairs of furniture legs in front, and low
+// things, where no actor's path runs through them (drawn all the same, so the rest of the walls
+// do not depend on the actors).
+void add_rough_wall(const Segment& wall, const RoughWalls& rw, const std::vector<Actor>& actors,
+                    std::mt19937_64& rng, World& out) {
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   const Eigen::Vector2d ab = wall.b - wall.a;
   const double length = ab.norm();
@@ -186,8 +228,13 @@ void add_rough_wall(const Segment& wall, const RoughWalls& rw, std::mt19937_64& 
       const double side = u01(rng) < 0.5 ? -1.0 : 1.0;
       const double along = s + u01(rng) * piece;
       const double off = side * (0.15 + u01(rng) * 0.45);
-      out.circles.push_back({at(along, off), 0.025});
-      out.circles.push_back({at(std::min(length, along + 0.5), off), 0.025});
+      const Circle first{at(along, off), 0.025};
+      const Circle second{at(std::min(length, along + 0.5), off), 0.025};
+      if (clear_of_actors(first.center, first.radius_m, actors) &&
+          clear_of_actors(second.center, second.radius_m, actors)) {
+        out.circles.push_back(first);
+        out.circles.push_back(second);
+      }
     }
     if (rw.low_things_per_10m > 0.0 && u01(rng) < rw.low_things_per_10m * piece / 10.0) {
       const double side = u01(rng) < 0.5 ? -1.0 : 1.0;
@@ -196,34 +243,14 @@ void add_rough_wall(const Segment& wall, const RoughWalls& rw, std::mt19937_64& 
                             u01(rng) * (rw.low_things_max_radius_m - rw.low_things_min_radius_m);
       const double off =
           side * (radius + 0.05 + u01(rng) * 0.3);  // Against the wall, as furniture.
-      out.circles.push_back(
-          {at(along, off), radius,
-           rw.low_things_min_seen_within_m +
-               u01(rng) * (rw.low_things_max_seen_within_m - rw.low_things_min_seen_within_m)});
+      const Circle thing{
+          at(along, off), radius,
+          rw.low_things_min_seen_within_m +
+              u01(rng) * (rw.low_things_max_seen_within_m - rw.low_things_min_seen_within_m)};
+      if (clear_of_actors(thing.center, thing.radius_m, actors)) out.circles.push_back(thing);
     }
     s += piece;
   }
-}
-
-// Distance from p to the segment from a to b (to a when they coincide).
-double distance_to_segment(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
-                           const Eigen::Vector2d& b) {
-  const Eigen::Vector2d ab = b - a;
-  const double t =
-      ab.squaredNorm() > 0.0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-  return (a + t * ab - p).norm();
-}
-
-// Distance from p to the path through @p points (to the point itself when there is one).
-double distance_to_path(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& points,
-                        bool closed) {
-  double best = std::numeric_limits<double>::infinity();
-  const std::size_t n = points.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector2d& b = i + 1 < n ? points[i + 1] : (closed ? points[0] : points[i]);
-    best = std::min(best, distance_to_segment(p, points[i], b));
-  }
-  return best;
 }
 
 // Clutter: count things placed at random in the area, each keep_clear_m (plus its radius) from
@@ -574,7 +601,7 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
   std::mt19937_64 world_rng(seed ^ 0x5eed5eed5eedULL);
   if (scenario.world.rough_walls) {
     for (const Segment& wall : scenario.world.walls)
-      add_rough_wall(wall, *scenario.world.rough_walls, world_rng, base);
+      add_rough_wall(wall, *scenario.world.rough_walls, specs, world_rng, base);
   } else {
     base.segments = scenario.world.walls;
   }

@@ -61,8 +61,10 @@ struct SimulationSink {
 /// @p seed, handing every scan and sensor sample to @p sink as it is made: nothing of the run is
 /// held, so any duration whose stamps a bag can hold runs in the same memory. The same scenario
 /// and seed give the same stream. Returns the number of actors (scripted and generated).
-/// @throws std::invalid_argument if scenario.validate() does, or naming "--duration" for a
-/// @p duration_s that is not finite or whose stamps reach 2^32 s.
+/// @throws std::invalid_argument if scenario.validate() does, naming a scripted actor whose path
+/// goes through a wall, rectangle or circle (a person reaches 0.16 m either side of its path, a
+/// vehicle half its footprint's diagonal), or naming "--duration" for a @p duration_s that is not
+/// finite or whose stamps reach 2^32 s.
 std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double duration_s,
                       const SimulationSink& sink);
 

@@ -168,13 +168,17 @@ double distance_to_path(const Eigen::Vector2d& p, const std::vector<Eigen::Vecto
 constexpr double kPersonReach_m = 0.16;
 constexpr double kPassingGap_m = 0.05;
 
+// How far an actor reaches either side of its path: a person's legs, half a vehicle's width.
+double actor_reach(const Actor& actor) {
+  return actor.kind == ActorKind::kPerson ? kPersonReach_m : 0.5 * actor.width_m;
+}
+
 // Whether a circle at @p center of @p radius leaves every actor's path room to pass: people and
 // carts go past furniture, not through it.
 bool clear_of_actors(const Eigen::Vector2d& center, double radius,
                      const std::vector<Actor>& actors) {
   for (const Actor& a : actors) {
-    const double reach = a.kind == ActorKind::kPerson ? kPersonReach_m : 0.5 * a.width_m;
-    if (distance_to_path(center, a.waypoints, a.loop) < radius + reach + kPassingGap_m) {
+    if (distance_to_path(center, a.waypoints, a.loop) < radius + actor_reach(a) + kPassingGap_m) {
       return false;
     }
   }
@@ -532,7 +536,7 @@ void check_actor_paths(const Scenario& scenario) {
   for (std::size_t i = 0; i < scenario.actors.size(); ++i) {
     const Actor& actor = scenario.actors[i];
     const bool person = actor.kind == ActorKind::kPerson;
-    const double reach = person ? kPersonReach_m : 0.5 * actor.width_m;
+    const double reach = actor_reach(actor);
     const double overhang = person ? 0.0 : std::max(0.0, 0.5 * (actor.length_m - actor.width_m));
     std::vector<Eigen::Vector2d> points = actor.waypoints;
     if (actor.loop && points.size() > 1) points.push_back(points.front());

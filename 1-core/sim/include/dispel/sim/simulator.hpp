@@ -63,8 +63,8 @@ struct SimulationSink {
 /// and seed give the same stream. Returns the number of actors (scripted and generated).
 /// @throws std::invalid_argument if scenario.validate() does, naming a scripted actor whose path
 /// goes through a wall, rectangle or circle (a person reaches 0.16 m either side of its path, a
-/// vehicle half its footprint's diagonal), or naming "--duration" for a @p duration_s that is not
-/// finite or whose stamps reach 2^32 s.
+/// vehicle half its width, and half its length beyond each waypoint), or naming "--duration" for a
+/// @p duration_s that is not finite or whose stamps reach 2^32 s.
 std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double duration_s,
                       const SimulationSink& sink);
 

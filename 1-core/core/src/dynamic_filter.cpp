@@ -31,7 +31,8 @@ bool edge_at_view_limit(EdgeNeighbour n) {
 }
 
 // A track followed for longer than this without any sign of motion is known structure seen from
-// a new side (or merged with someone next to it), not something that just appeared in free space.
+// a new side (or merged with someone next to it), not something that just appeared in free space;
+// unless it is beside a dynamic track (free_space.mark_beside_dynamic): a walker's other leg.
 constexpr std::int32_t kFreeSpaceMaxAge = 10;
 // An object made dynamic by free space is judged kFreeSpaceDecision_s later: confirmed if its
 // centroid has moved more than kFreeSpaceConfirm_m from where it appeared (or it is beside a
@@ -604,11 +605,14 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
   if (track.free_space_pending && elapsed >= kFreeSpaceDecision_s) {
     const double moved = moved_since_marked(track, obs);
     // Decided once, when the object has had time to move (see kFreeSpaceDecision_s): confirmed
-    // when it has moved as a walker can, or it is beside a track that has; else refuted.
+    // when it has moved as a walker can, or it is beside a track that has (unless that is what
+    // marked it: a low thing first hit up close beside a walker, office_revisits' walls); else
+    // refuted.
     track.free_space_pending = false;
     const bool moved_plausibly =
         moved > kFreeSpaceConfirm_m && moved <= kFreeSpaceConfirm_m + kMaxWalkerSpeed_mps * elapsed;
-    if (!moved_plausibly && !beside_moving_track(track, obs.points[kCentroid])) {
+    if (!moved_plausibly &&
+        (track.marked_beside || !beside_moving_track(track, obs.points[kCentroid]))) {
       track.free_space_refuted = true;
       track.cls = initial_class_state(cc);
       ++counters_.free_space_refuted;
@@ -650,6 +654,7 @@ void DynamicFilter::start_tracks(double stamp_s) {
       track.cls = from.cls;
       track.free_space_pending = from.free_space_pending;
       track.free_space_refuted = from.free_space_refuted;
+      track.marked_beside = from.marked_beside;
       track.marked_at = from.marked_at;
       track.marked_first = from.marked_first;
       track.marked_last = from.marked_last;
@@ -693,16 +698,21 @@ void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan,
   const std::size_t n = segmentation.objects.size();
   // Which objects the free space could mark (the rest are not asked about: most of a scan is
   // surfaces the map explains or tracks too old for it), and the points in free space each of
-  // them needs.
+  // them needs. An older track is asked when it is beside a dynamic one: a walker who walks
+  // beside the robot hides one leg behind the other for seconds, and the leg's own track, static
+  // since it last stood, steps out into space seen free beside the leg tracked as dynamic (on the
+  // simulated office at 1 m/s it kept 3 scans of that leg at every step; docs/dynamic_filter.md).
   const auto could_mark = [&](std::size_t i) {
     const ScanObject& o = segmentation.objects[i];
     const Track& t = tracks_[static_cast<std::size_t>(track_of_object_[i])];
     return (o.last_point_m - o.first_point_m).norm() <=
                config_.classification.max_dynamic_extent_m &&
            observations_[i].explained_share < kExplainedShare &&
-           observations_[i].recurring_share < kRecurringObjectShare &&
-           t.age_scans <= kFreeSpaceMaxAge && !t.free_space_refuted &&
-           t.cls.object_class != ObjectClass::kDynamic;
+           observations_[i].recurring_share < kRecurringObjectShare && !t.free_space_refuted &&
+           t.cls.object_class != ObjectClass::kDynamic &&
+           (t.age_scans <= kFreeSpaceMaxAge ||
+            (config_.free_space.mark_beside_dynamic &&
+             beside_moving_track(t, observations_[i].points[kCentroid])));
   };
   // The space must have been seen through by beams dense enough to hit the object: at most half
   // its width apart (a chair leg seen close was missed, not absent, by beams 3 cm apart at 5 m).
@@ -730,6 +740,7 @@ void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan,
     if (!(static_cast<double>(points_in_free_[i]) >= points_needed_[i])) continue;
     Track& t = tracks_[static_cast<std::size_t>(track_of_object_[i])];
     t.free_space_pending = true;
+    t.marked_beside = t.age_scans > kFreeSpaceMaxAge;
     t.marked_at = observations_[i].points[kCentroid];
     t.marked_first = observations_[i].points[kFirst];
     t.marked_last = observations_[i].points[kLast];

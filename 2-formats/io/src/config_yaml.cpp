@@ -186,6 +186,7 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   b.integer("free_space.long_occupied_scans", f.long_occupied_scans);
   b.integer("free_space.neighbourhood_cells", f.neighbourhood_cells);
   b.number("free_space.min_object_share", f.min_object_share);
+  b.boolean("free_space.mark_beside_dynamic", f.mark_beside_dynamic);
   RegistrationConfig& g = c.registration;
   b.section("registration");
   b.boolean("registration.enabled", g.enabled);

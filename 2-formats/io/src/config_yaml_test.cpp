@@ -70,6 +70,7 @@ void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d
   EXPECT_EQ(loaded.free_space.long_occupied_scans, d.free_space.long_occupied_scans);
   EXPECT_EQ(loaded.free_space.neighbourhood_cells, d.free_space.neighbourhood_cells);
   EXPECT_EQ(loaded.free_space.min_object_share, d.free_space.min_object_share);
+  EXPECT_EQ(loaded.free_space.mark_beside_dynamic, d.free_space.mark_beside_dynamic);
   EXPECT_EQ(loaded.max_time_gap_s, d.max_time_gap_s);
   EXPECT_EQ(loaded.max_pose_jump_m, d.max_pose_jump_m);
   EXPECT_EQ(loaded.max_pose_jump_rad, d.max_pose_jump_rad);

@@ -138,8 +138,8 @@ TEST(FilterJobOnRecordedBag, RemovesWalkersKeepsWallsAndCopiesEveryMessage) {
   ASSERT_NO_FATAL_FAILURE(filter_recorded_bag(std::nullopt, d));  // dispel's default.
   RecordProperty("wall_beams_kept", std::to_string(d.walls_kept));
   RecordProperty("walker_beams_removed", std::to_string(d.walkers_removed));
-  // Measured 1.000 and 0.904; legs beyond 4 m cover under 4 beams, the scaled N_min, and are not
-  // objects at all.
+  // Measured 1.000 and 0.941 (0.935 before free_space.mark_beside_dynamic); legs beyond 4 m
+  // cover under 4 beams, the scaled N_min, and are not objects at all.
   EXPECT_GE(d.walls_kept, 0.99);
   EXPECT_GE(d.walkers_removed, 0.88);
 }

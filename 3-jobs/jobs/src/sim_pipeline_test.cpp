@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <utility>
 #include <vector>
@@ -214,40 +215,73 @@ TEST(SimPipeline, ARunThatWouldNotFitOnTheDiskIsRefusedBeforeAnyWork) {
 // off-centre and yawed, beams over the sweep, drifting odometry: the walls that slide along the
 // robot as it passes them used to become "walkers" (preservation 0.895 on seed 1 before the
 // registration and the map's explanation; 0.41 on a real robot). Seed 1, the whole minute:
-// measured 0.9989 kept and 0.817 removed (0.998 and 0.83 while a walker walked through a low
-// thing and brushed through a cabinet; 0.993 and 0.82 before the simulated robot rounded its
-// corners; the targets are 0.995 and 0.90: the rejection target is not reached,
-// docs/results.md).
-// A shipped moving scenario, seed 1, simulated, filtered with dispel's default scaled to its
-// scanner and evaluated; the bags are removed.
+// measured 0.9963 kept and 0.897 removed (0.9989 and 0.817 before free space was asked about a
+// walker's hidden leg, below; 0.998 and 0.83 while a walker walked through a low thing and
+// brushed through a cabinet; 0.993 and 0.82 before the simulated robot rounded its corners; the
+// issue's targets are 0.995 and 0.90: the rejection target is not reached, docs/results.md).
+// A shipped moving scenario, simulated (seed 1 unless told), filtered with dispel's default
+// scaled to its scanner and evaluated, and with @p variant also filtered with the default changed
+// by it; the bags are removed.
 struct FilteredScenario {
   FilterJobStats stats;
   eval::Rates rates;
+  eval::Rates variant_rates;
 };
-FilteredScenario simulate_and_filter(const char* scenario) {
+FilteredScenario simulate_and_filter(const char* scenario,
+                                     const std::function<void(DynamicFilterConfig&)>& variant = {},
+                                     int seed = 1) {
   const std::string dir = test::temp_dir();
   const sim::Scenario s = load_scenario(scenario_path(scenario));
   const std::string bag = dir + "/" + scenario + ".bag";
-  write_simulation(sim::simulate(s, 1), s, bag);
+  write_simulation(sim::simulate(s, seed), s, bag);
   FilterJobOptions o;
   o.input = bag;
   o.output = dir + "/" + scenario + "_filtered.bag";
   o.scale_to_scanner = true;
-  FilteredScenario out{run_filter_job(o), evaluate_bags(bag, o.output)};
+  FilteredScenario out{run_filter_job(o), evaluate_bags(bag, o.output), {}};
+  if (variant) {
+    o.config = DynamicFilterConfig{};
+    variant(*o.config);
+    run_filter_job(o);
+    out.variant_rates = evaluate_bags(bag, o.output);
+  }
   std::remove(bag.c_str());
   std::remove(o.output.c_str());
   return out;
 }
 
+// The walker who walks beside the robot at its pace (0.8-1.0 m to its right for 24 s) hides one
+// leg behind the other for seconds at a time. The hidden leg's track, static since the leg last
+// stood, is too old for free space to be asked about it; when the leg steps out into space seen
+// free beside the leg tracked as dynamic, free space is asked all the same
+// (free_space.mark_beside_dynamic). Without it the leg was kept for about 3 scans at every such
+// step: 0.817 removed against 0.897 (and 0.9989 kept against 0.9963).
 TEST(SimPipeline, DrivingRobotAlongRoughCorridorsKeepsItsWalls) {
-  const FilteredScenario office = simulate_and_filter("office_corridors");
+  const FilteredScenario office = simulate_and_filter(
+      "office_corridors", [](DynamicFilterConfig& c) { c.free_space.mark_beside_dynamic = false; });
   EXPECT_GE(office.rates.preservation_rate(), 0.995);
-  EXPECT_GE(office.rates.rejection_rate(), 0.80);
+  EXPECT_GE(office.rates.rejection_rate(), 0.85);
+  EXPECT_GE(office.variant_rates.preservation_rate(), 0.995);
+  EXPECT_GE(office.rates.rejection_rate() - office.variant_rates.rejection_rate(), 0.04);
   // The first scans may fall back to the odometry while the map is young (measured: 461 of 462
   // registered; 443 of 457 before the robot rounded its corners).
   EXPECT_GE(static_cast<double>(office.stats.counters.scans_registered),
             0.95 * static_cast<double>(office.stats.scans));
   EXPECT_EQ(office.stats.counters.scans_without_odometry, 0);
+}
+
+// The office driven twice round (200 s) with larger low things, which a tilted scan plane sees
+// only up close: beams passed over where they stand. One first hit beside a walker is in space
+// seen free and beside a dynamic track, so free space marks it however old its track is
+// (free_space.mark_beside_dynamic); 0.4 s later it has not moved. It is static again: what marked
+// it (standing beside a walker) does not also confirm it, as it does a walker's planted foot.
+// Seed 3: measured 0.9922 of the static beams kept (0.9834 when the walker beside it confirmed
+// it; 0.9932 before the rule); the target is 0.995, met over five seeds (0.9960) but not
+// on this one.
+TEST(SimPipeline, ALowThingFirstSeenBesideAWalkerIsNotConfirmedByTheWalker) {
+  const FilteredScenario revisits = simulate_and_filter("office_revisits", {}, 3);
+  EXPECT_GE(revisits.rates.preservation_rate(), 0.99);
+  EXPECT_GE(revisits.rates.rejection_rate(), 0.85);  // Measured 0.880.
 }
 
 // A warehouse aisle at 1 m/s (seed 1, the whole minute). A cart drives to and fro along the end

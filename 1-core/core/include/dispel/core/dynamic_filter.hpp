@@ -225,6 +225,9 @@ class DynamicFilter {
     // only within some range); it is static again and free space never marks it again.
     bool free_space_pending = false;
     bool free_space_refuted = false;
+    // Marked when older than free space asks about, because it stood beside a dynamic track (a
+    // walker's other leg): confirmed only by its own motion, not by standing beside one.
+    bool marked_beside = false;
     Eigen::Vector2d marked_at = Eigen::Vector2d::Zero();
     // Its edges then, and whether both were its outline (see kElongated_m).
     Eigen::Vector2d marked_first = Eigen::Vector2d::Zero();

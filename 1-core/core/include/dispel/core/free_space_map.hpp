@@ -57,6 +57,11 @@ struct FreeSpaceConfig {
   int neighbourhood_cells = 3;
   /// An object whose points are in free space by at least this share appeared in free space.
   double min_object_share = 0.5;
+  /// Free space is asked about the objects of young tracks only (10 scans: an older track that
+  /// has shown no motion is a known thing seen from a new side). With this, also about an older
+  /// track's object beside a dynamic track confirmed by its motion: a walker's leg, long hidden
+  /// behind the other leg as it walks beside the robot, that steps out into space seen free.
+  bool mark_beside_dynamic = true;
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;

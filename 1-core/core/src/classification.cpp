@@ -34,6 +34,9 @@ void ClassificationConfig::validate() const {
     reject("max_dynamic_extent_m", max_dynamic_extent_m, "> 0");
   }
   if (still_scans_to_static < 0) reject("still_scans_to_static", still_scans_to_static, ">= 0");
+  if (!(still_alone_to_static_s >= 0.0 && still_alone_to_static_s <= 3600.0)) {
+    reject("still_alone_to_static_s", still_alone_to_static_s, "in [0, 3600]");
+  }
   if (!(max_point_count_ratio >= 1.0)) {
     reject("max_point_count_ratio", max_point_count_ratio, ">= 1");
   }

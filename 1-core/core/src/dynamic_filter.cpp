@@ -54,6 +54,10 @@ constexpr double kEdgesAgree_m = 0.15;
 // next to it), which is no evidence of motion: refuted too.
 constexpr double kMaxWalkerSpeed_mps = 2.5;
 
+// A dynamic track whose centroid stays within this of one place is still
+// (classification.still_alone_to_static_s): a walker leaves it within a stride.
+constexpr double kStillRadius_m = 0.15;
+
 // An object whose beams the registered map explains by at least this share is a surface that has
 // stood there: whatever its outline does, it is not moving.
 constexpr double kExplainedShare = 0.5;
@@ -634,6 +638,19 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
     track.cls.object_class = ObjectClass::kStatic;
     track.cls.dynamic_weight = 0;
   }
+  // Dynamic, still for still_alone_to_static_s, and alone: static again.
+  if (track.cls.object_class != ObjectClass::kDynamic ||
+      (obs.points[kCentroid] - track.still_at).norm() > kStillRadius_m) {
+    track.still_at = obs.points[kCentroid];
+    track.still_since_s = stamp_s;
+    track.still_since_unseen = track.missed_scans > 0;
+  } else if (cc.still_alone_to_static_s > 0.0 && track.still_since_unseen &&
+             stamp_s - track.still_since_s >= cc.still_alone_to_static_s &&
+             !beside_moving_track(track, obs.points[kCentroid])) {
+    track.cls = initial_class_state(cc);
+    track.free_space_pending = false;
+    ++counters_.still_alone_to_static;
+  }
   track.point_count = obs.point_count;
   // A dynamic object keeps the extent it had when it became dynamic: people and vehicles do not
   // grow, so its track cannot creep onto a wall the person stood next to.
@@ -687,6 +704,8 @@ DynamicFilter::Track DynamicFilter::new_track(const Observation& obs, double sta
   t.object_index = object_index;
   t.local_anchor = obs.local_centroid;
   t.local_still_since_s = stamp_s;
+  t.still_at = obs.points[kCentroid];
+  t.still_since_s = stamp_s;
   ++counters_.tracks_created;
   return t;
 }

@@ -73,6 +73,7 @@ DynamicFilterConfig thesis_config() {
   c.classification.static_weight_limit = 50;
   c.classification.slow_scans_reduce_dynamic_weight = false;
   c.classification.still_scans_to_static = 0;
+  c.classification.still_alone_to_static_s = 0.0;
   c.free_space.enabled = false;
   c.registration.enabled = false;
   return c;

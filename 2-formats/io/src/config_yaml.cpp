@@ -170,6 +170,7 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   b.number("classification.max_dynamic_extent_m", k.max_dynamic_extent_m);
   b.number("classification.max_point_count_ratio", k.max_point_count_ratio);
   b.integer("classification.still_scans_to_static", k.still_scans_to_static);
+  b.number("classification.still_alone_to_static_s", k.still_alone_to_static_s);
   b.boolean("classification.slow_scans_reduce_dynamic_weight", k.slow_scans_reduce_dynamic_weight);
   FreeSpaceConfig& f = c.free_space;
   b.section("free_space");

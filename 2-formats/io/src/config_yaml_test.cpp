@@ -55,6 +55,8 @@ void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d
   EXPECT_EQ(loaded.classification.max_dynamic_extent_m, d.classification.max_dynamic_extent_m);
   EXPECT_EQ(loaded.classification.max_point_count_ratio, d.classification.max_point_count_ratio);
   EXPECT_EQ(loaded.classification.still_scans_to_static, d.classification.still_scans_to_static);
+  EXPECT_EQ(loaded.classification.still_alone_to_static_s,
+            d.classification.still_alone_to_static_s);
   EXPECT_EQ(loaded.classification.slow_scans_reduce_dynamic_weight,
             d.classification.slow_scans_reduce_dynamic_weight);
   EXPECT_EQ(loaded.free_space.enabled, d.free_space.enabled);
@@ -100,6 +102,7 @@ TEST(ConfigYaml, ShippedThesisFileHoldsExactlyTheThesisParameters) {
   EXPECT_EQ(t.segmentation.gap_metric, GapMetric::kRangeDifference);
   EXPECT_FALSE(t.classification.slow_scans_reduce_dynamic_weight);
   EXPECT_EQ(t.classification.still_scans_to_static, 0);
+  EXPECT_EQ(t.classification.still_alone_to_static_s, 0.0);
 }
 
 TEST(ConfigYaml, ShippedMaskedFilesAreTheirPresetsWithTheThesisScannersSectors) {

@@ -215,21 +215,22 @@ TEST(SimPipeline, ARunThatWouldNotFitOnTheDiskIsRefusedBeforeAnyWork) {
 // off-centre and yawed, beams over the sweep, drifting odometry: the walls that slide along the
 // robot as it passes them used to become "walkers" (preservation 0.895 on seed 1 before the
 // registration and the map's explanation; 0.41 on a real robot). Seed 1, the whole minute:
-// measured 0.9963 kept and 0.897 removed (0.9989 and 0.817 before free space was asked about a
-// walker's hidden leg, below; 0.998 and 0.83 while a walker walked through a low thing and
+// measured 0.9983 kept and 0.897 removed (0.9963 and 0.897 before a dynamic track that stood
+// still alone became static again, 0.9989 and 0.817 before free space was asked about a walker's
+// hidden leg, below; 0.998 and 0.83 while a walker walked through a low thing and
 // brushed through a cabinet; 0.993 and 0.82 before the simulated robot rounded its corners; the
 // issue's targets are 0.995 and 0.90: the rejection target is not reached, docs/results.md).
 // A shipped moving scenario, simulated (seed 1 unless told), filtered with dispel's default
-// scaled to its scanner and evaluated, and with @p variant also filtered with the default changed
-// by it; the bags are removed.
+// scaled to its scanner and evaluated, and also with the default changed by each of @p variants;
+// the bags are removed.
+using ConfigChange = std::function<void(DynamicFilterConfig&)>;
 struct FilteredScenario {
   FilterJobStats stats;
   eval::Rates rates;
-  eval::Rates variant_rates;
+  std::vector<eval::Rates> variant_rates;
 };
 FilteredScenario simulate_and_filter(const char* scenario,
-                                     const std::function<void(DynamicFilterConfig&)>& variant = {},
-                                     int seed = 1) {
+                                     const std::vector<ConfigChange>& variants = {}, int seed = 1) {
   const std::string dir = test::temp_dir();
   const sim::Scenario s = load_scenario(scenario_path(scenario));
   const std::string bag = dir + "/" + scenario + ".bag";
@@ -239,11 +240,11 @@ FilteredScenario simulate_and_filter(const char* scenario,
   o.output = dir + "/" + scenario + "_filtered.bag";
   o.scale_to_scanner = true;
   FilteredScenario out{run_filter_job(o), evaluate_bags(bag, o.output), {}};
-  if (variant) {
+  for (const ConfigChange& change : variants) {
     o.config = DynamicFilterConfig{};
-    variant(*o.config);
+    change(*o.config);
     run_filter_job(o);
-    out.variant_rates = evaluate_bags(bag, o.output);
+    out.variant_rates.push_back(evaluate_bags(bag, o.output));
   }
   std::remove(bag.c_str());
   std::remove(o.output.c_str());
@@ -255,14 +256,24 @@ FilteredScenario simulate_and_filter(const char* scenario,
 // stood, is too old for free space to be asked about it; when the leg steps out into space seen
 // free beside the leg tracked as dynamic, free space is asked all the same
 // (free_space.mark_beside_dynamic). Without it the leg was kept for about 3 scans at every such
-// step: 0.817 removed against 0.897 (and 0.9989 kept against 0.9963).
+// step: 0.817 removed against 0.897 (and 0.9990 kept against 0.9983).
+// When that walker's route ends, a leg's dynamic track, lost for a few scans with its gate
+// widened, was matched to a low thing first seen up close nearby and stayed dynamic while it
+// stood (still_scans_to_static), its beams never learned by the map: 0.9963 kept without
+// classification.still_alone_to_static_s (a dynamic track that stood still for 1 s where it was
+// seen again after scans unseen, with no dynamic track beside it, is static again).
 TEST(SimPipeline, DrivingRobotAlongRoughCorridorsKeepsItsWalls) {
   const FilteredScenario office = simulate_and_filter(
-      "office_corridors", [](DynamicFilterConfig& c) { c.free_space.mark_beside_dynamic = false; });
-  EXPECT_GE(office.rates.preservation_rate(), 0.995);
+      "office_corridors",
+      {[](DynamicFilterConfig& c) { c.free_space.mark_beside_dynamic = false; },
+       [](DynamicFilterConfig& c) { c.classification.still_alone_to_static_s = 0.0; }});
+  EXPECT_GE(office.rates.preservation_rate(), 0.997);
   EXPECT_GE(office.rates.rejection_rate(), 0.85);
-  EXPECT_GE(office.variant_rates.preservation_rate(), 0.995);
-  EXPECT_GE(office.rates.rejection_rate() - office.variant_rates.rejection_rate(), 0.04);
+  const eval::Rates& without_beside = office.variant_rates.at(0);
+  EXPECT_GE(without_beside.preservation_rate(), 0.995);
+  EXPECT_GE(office.rates.rejection_rate() - without_beside.rejection_rate(), 0.04);
+  const eval::Rates& without_still = office.variant_rates.at(1);
+  EXPECT_GE(office.rates.preservation_rate() - without_still.preservation_rate(), 0.001);
   // The first scans may fall back to the odometry while the map is young (measured: 461 of 462
   // registered; 443 of 457 before the robot rounded its corners).
   EXPECT_GE(static_cast<double>(office.stats.counters.scans_registered),
@@ -275,13 +286,12 @@ TEST(SimPipeline, DrivingRobotAlongRoughCorridorsKeepsItsWalls) {
 // seen free and beside a dynamic track, so free space marks it however old its track is
 // (free_space.mark_beside_dynamic); 0.4 s later it has not moved. It is static again: what marked
 // it (standing beside a walker) does not also confirm it, as it does a walker's planted foot.
-// Seed 3: measured 0.9922 of the static beams kept (0.9834 when the walker beside it confirmed
-// it; 0.9932 before the rule); the target is 0.995, met over five seeds (0.9960) but not
-// on this one.
+// Seed 3: measured 0.9963 of the static beams kept (0.9909 when the walker beside it confirmed
+// it; 0.9922 without classification.still_alone_to_static_s; 0.9932 before either rule).
 TEST(SimPipeline, ALowThingFirstSeenBesideAWalkerIsNotConfirmedByTheWalker) {
   const FilteredScenario revisits = simulate_and_filter("office_revisits", {}, 3);
-  EXPECT_GE(revisits.rates.preservation_rate(), 0.99);
-  EXPECT_GE(revisits.rates.rejection_rate(), 0.85);  // Measured 0.880.
+  EXPECT_GE(revisits.rates.preservation_rate(), 0.995);
+  EXPECT_GE(revisits.rates.rejection_rate(), 0.85);  // Measured 0.879.
 }
 
 // A warehouse aisle at 1 m/s (seed 1, the whole minute). A cart drives to and fro along the end

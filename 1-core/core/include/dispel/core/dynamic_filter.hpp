@@ -65,6 +65,9 @@ struct FilterCounters {
   /// Tracks made dynamic by free space that had not moved like a walker 0.4 s later (static
   /// again; docs/dynamic_filter.md, "Per scan", free space).
   std::int64_t free_space_refuted = 0;
+  /// Dynamic tracks static again after standing still alone for
+  /// classification.still_alone_to_static_s.
+  std::int64_t still_alone_to_static = 0;
   /// Beams of no object removed as fragments of a dynamic track (tracking.fragment_distance_m);
   /// included in beams_removed_dynamic.
   std::int64_t beams_removed_fragments = 0;
@@ -219,6 +222,11 @@ class DynamicFilter {
     // the robot (or something it carries) moves with the sensor.
     Eigen::Vector2d local_anchor;
     double local_still_since_s;
+    // Where a dynamic track's centroid has stayed (within kStillRadius_m) since when
+    // (classification.still_alone_to_static_s).
+    Eigen::Vector2d still_at;
+    double still_since_s;
+    bool still_since_unseen = false;  // It was first seen there after scans unseen.
     // Dynamic because it appeared in space seen free, not yet confirmed by its own motion: where
     // and when it was. Something that then stays put was there all along, below or above the
     // scan plane where the beams passed (a chair seat, a shelf's edge: a tilted plane sees it

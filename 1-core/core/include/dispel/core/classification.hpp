@@ -48,12 +48,13 @@ struct ClassificationConfig {
   /// person out of the scan for a while, and it undoes a dynamic track that has drifted onto a
   /// wall. 100 scans is 5 s at the thesis's 20 Hz.
   int still_scans_to_static = 100;
-  /// Beyond the thesis: a dynamic object that has stayed within 0.15 m of one place for this long
-  /// with no other dynamic track beside it (within tracking.companion_distance_m) is static again
-  /// (0: never). A person who stops keeps the track of the other leg beside each leg; a dynamic
-  /// track that lost its walker and was matched to something standing there (a low thing first
-  /// seen up close, its gate widened by the scans it was unseen) has none, and it would keep that
-  /// thing's beams out of the scan and the map for still_scans_to_static scans.
+  /// Beyond the thesis: a dynamic object that has stayed within 0.15 m of the place where it was
+  /// seen again after scans unseen, for this long, with no other dynamic track beside it (within
+  /// tracking.companion_distance_m), is static again (0: never). A person who stops keeps the
+  /// track of the other leg beside each leg, and one who pauses in view was not unseen first; a
+  /// dynamic track that lost its walker and was matched to something standing there (a low thing
+  /// first seen up close, its gate widened by the scans it was unseen) has neither, and it would
+  /// keep that thing's beams out of the scan and the map for still_scans_to_static scans.
   double still_alone_to_static_s = 1.0;
   /// A scan where the object's point count changed by more than this factor since the last scan
   /// gives no evidence (a merge, a split, or an occlusion starting).

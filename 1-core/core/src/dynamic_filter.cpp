@@ -623,12 +623,11 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
     }
   }
   // Part of the robot: still in the sensor frame for long, near it.
-  if ((obs.local_centroid - track.local_anchor).norm() > kAttachedTolerance_m) {
-    track.local_anchor = obs.local_centroid;
-    track.local_still_since_s = stamp_s;
+  if (track.local_still.left(obs.local_centroid, kAttachedTolerance_m)) {
+    track.local_still.restart(obs.local_centroid, stamp_s);
   }
   const bool attached =
-      config_.registration.enabled && ((stamp_s - track.local_still_since_s >= kAttachedTime_s &&
+      config_.registration.enabled && ((stamp_s - track.local_still.since_s >= kAttachedTime_s &&
                                         obs.local_centroid.norm() <= kAttachedRange_m) ||
                                        obs.recurring_share >= kRecurringObjectShare);
   track.attached = attached;
@@ -640,12 +639,11 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
   }
   // Dynamic, still for still_alone_to_static_s, and alone: static again.
   if (track.cls.object_class != ObjectClass::kDynamic ||
-      (obs.points[kCentroid] - track.still_at).norm() > kStillRadius_m) {
-    track.still_at = obs.points[kCentroid];
-    track.still_since_s = stamp_s;
+      track.still.left(obs.points[kCentroid], kStillRadius_m)) {
+    track.still.restart(obs.points[kCentroid], stamp_s);
     track.still_since_unseen = track.missed_scans > 0;
   } else if (cc.still_alone_to_static_s > 0.0 && track.still_since_unseen &&
-             stamp_s - track.still_since_s >= cc.still_alone_to_static_s &&
+             stamp_s - track.still.since_s >= cc.still_alone_to_static_s &&
              !beside_moving_track(track, obs.points[kCentroid])) {
     track.cls = initial_class_state(cc);
     track.free_space_pending = false;
@@ -702,10 +700,8 @@ DynamicFilter::Track DynamicFilter::new_track(const Observation& obs, double sta
   t.extent_m = obs.extent_m;
   t.speed_mps = 0.0;
   t.object_index = object_index;
-  t.local_anchor = obs.local_centroid;
-  t.local_still_since_s = stamp_s;
-  t.still_at = obs.points[kCentroid];
-  t.still_since_s = stamp_s;
+  t.local_still.restart(obs.local_centroid, stamp_s);
+  t.still.restart(obs.points[kCentroid], stamp_s);
   ++counters_.tracks_created;
   return t;
 }

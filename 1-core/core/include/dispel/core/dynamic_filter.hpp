@@ -206,6 +206,18 @@ class DynamicFilter {
     double recurring_share;          // Of its beams, the share that moves with the robot: ending
                                      // where they often end, or beyond the robot's own body.
   };
+  // Where a point has stayed, within a tolerance the caller keeps, and since when.
+  struct StillSince {
+    Eigen::Vector2d at;
+    double since_s;
+    bool left(const Eigen::Vector2d& p, double tolerance_m) const {
+      return (p - at).norm() > tolerance_m;
+    }
+    void restart(const Eigen::Vector2d& p, double stamp_s) {
+      at = p;
+      since_s = stamp_s;
+    }
+  };
   struct Track {
     std::uint64_t id;
     std::array<PointVelocityFilter, 3> kf;
@@ -220,13 +232,11 @@ class DynamicFilter {
     std::int32_t object_index;
     // Where the object stands in the sensor frame, and since when it has stood there: a part of
     // the robot (or something it carries) moves with the sensor.
-    Eigen::Vector2d local_anchor;
-    double local_still_since_s;
-    // Where a dynamic track's centroid has stayed (within kStillRadius_m) since when
-    // (classification.still_alone_to_static_s).
-    Eigen::Vector2d still_at;
-    double still_since_s;
-    bool still_since_unseen = false;  // It was first seen there after scans unseen.
+    StillSince local_still;
+    // Where a dynamic track's centroid has stayed (within kStillRadius_m) since when, and whether
+    // it was first seen there after scans unseen (classification.still_alone_to_static_s).
+    StillSince still;
+    bool still_since_unseen = false;
     // Dynamic because it appeared in space seen free, not yet confirmed by its own motion: where
     // and when it was. Something that then stays put was there all along, below or above the
     // scan plane where the beams passed (a chair seat, a shelf's edge: a tilted plane sees it

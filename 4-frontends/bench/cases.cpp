@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "dispel/core/dynamic_filter.hpp"
+#include "dispel/core/free_space_map.hpp"
 #include "dispel/core/odometry_fusion.hpp"
 #include "dispel/core/pose2.hpp"
 #include "dispel/core/reference_dbscan.hpp"
@@ -161,6 +162,27 @@ void filter_pipeline_sparse(benchmark::State& state) {
   state.counters["beams"] = beams;
 }
 
+// The free-space grid alone (FreeSpaceMap::add_scan, dispel's default): each scan's beams traced
+// cell by cell from the scanner, which drives along the hall at 1 m/s and 20 Hz, so that the
+// window scrolls and new tiles are started as in a recording.
+void free_space_add_scan(benchmark::State& state) {
+  const auto beams = static_cast<std::int32_t>(state.range(0));
+  const std::vector<LaserScan> frames = hall_sequence(beams, 100);
+  FreeSpaceMap map{FreeSpaceConfig{}};
+  double stamp = 0.0;
+  double x = 0.0;
+  std::size_t k = 0;
+  for (auto _ : state) {
+    LaserScan scan = frames[k++ % frames.size()];
+    scan.stamp_s = stamp += 0.05;
+    map.add_scan(scan, Pose2{x += 0.05, 0.0, 0.0});
+    benchmark::ClobberMemory();
+  }
+  state.counters["beams"] = beams;
+  state.counters["tiles_started"] =
+      static_cast<double>(map.take_tiles_started()) / static_cast<double>(state.iterations());
+}
+
 template <NeighbourSearch kSearch>
 void dbscan(benchmark::State& state) {
   const LaserScan& scan = cached_scan(static_cast<std::int32_t>(state.range(0)));
@@ -220,6 +242,9 @@ void register_benchmarks(const RunSettings& settings) {
                 ->Arg(11000));
   configure(
       benchmark::RegisterBenchmark("filter_pipeline_sparse", filter_pipeline_sparse)->Arg(1617));
+  configure(benchmark::RegisterBenchmark("free_space_add_scan", free_space_add_scan)
+                ->Arg(768)
+                ->Arg(1617));
   configure(benchmark::RegisterBenchmark("reference_dbscan", dbscan<NeighbourSearch::kBruteForce>)
                 ->Arg(1617)
                 ->Arg(11000));

@@ -29,14 +29,15 @@ int main(int argc, char** argv) {
   dispel::apps::BenchOptions bench;
   CLI::App* bench_cmd = app.add_subcommand(
       "bench",
-      "Measure segmentation, the whole filter (the thesis's and dispel's default), the reference "
-      "DBSCAN and an odometry step, at 1617 to 1000000 beams");
+      "Measure segmentation, the whole filter (the thesis's and dispel's default), the free-space "
+      "grid, the reference DBSCAN and an odometry step, at 768 to 1000000 beams");
   bench_cmd->add_flag("--json", bench.json,
                       R"(Print {"results": [{"name", "beams", "median_ns"}]})");
   bench_cmd
       ->add_option("--filter", bench.filter,
                    "Regular expression on case names: segmentation, filter_pipeline, "
-                   "filter_pipeline_default, filter_pipeline_sparse, reference_dbscan, "
+                   "filter_pipeline_default, filter_pipeline_sparse, free_space_add_scan, "
+                   "reference_dbscan, "
                    "reference_dbscan_grid, "
                    "odometry_ct_step, odometry_omni_step (e.g. segmentation/1617)")
       ->capture_default_str();

@@ -288,18 +288,14 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     const double start_cells = start / c;
     double t = 0.0;
     // A beam crosses several cells of a tile in a row: the tile is looked up (and the reach, a
-    // square of tiles around the sensor's, checked) when the beam enters it. A beam that leaves
-    // the reach never comes back.
+    // square of tiles around the sensor's, checked) when the beam enters it, known from the cell's
+    // place in its tile (lx, ly) leaving 0..kTileSide-1. A beam that leaves the reach never comes
+    // back.
     std::int64_t tile_x = ix >> kTileBits, tile_y = iy >> kTileBits;
+    std::int64_t lx = ix & (kTileSide - 1), ly = iy & (kTileSide - 1);
     Cell* cells = tile(tile_x, tile_y);
-    while (t < length) {
-      if ((ix >> kTileBits) != tile_x || (iy >> kTileBits) != tile_y) {
-        tile_x = ix >> kTileBits;
-        tile_y = iy >> kTileBits;
-        if (!tile_within_reach(tile_x, tile_y)) break;
-        cells = tile(tile_x, tile_y);
-      }
-      Cell& cell = cells[in_tile(ix, iy)];
+    for (;;) {
+      Cell& cell = cells[(ly << kTileBits) + lx];
       if (cell.last_scan != scans_) {
         cell.last_scan = scans_;
         cell.balance = static_cast<std::int16_t>(std::max(cell.balance - 1, -cap));
@@ -314,11 +310,20 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
       if (next_x < next_y) {
         t = next_x;
         next_x += delta_x;
-        ix += step_x;
+        lx += step_x;
       } else {
         t = next_y;
         next_y += delta_y;
-        iy += step_y;
+        ly += step_y;
+      }
+      if (!(t < length)) break;
+      if (((lx | ly) & ~(kTileSide - 1)) != 0) {  // Into the next tile (arithmetic shifts).
+        tile_x += lx >> kTileBits;
+        tile_y += ly >> kTileBits;
+        lx &= kTileSide - 1;
+        ly &= kTileSide - 1;
+        if (!tile_within_reach(tile_x, tile_y)) break;
+        cells = tile(tile_x, tile_y);
       }
     }
   }

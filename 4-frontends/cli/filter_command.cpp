@@ -57,6 +57,7 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
                        {"odometry_overruled", s.counters.odometry_overruled},
                        {"realigned", s.counters.scans_realigned},
                        {"guess_limited", s.counters.registration_guess_limited},
+                       {"held_sideways", s.counters.registration_held_sideways},
                        {"voxels_restarted", s.counters.map_voxels_restarted},
                        {"residual_m",
                         {{"median", percentile(s.registration_residual_m, 0.5)},

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <utility>
 
@@ -168,8 +169,14 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   const bool registering = config_.registration.enabled;
   out.registration = RegistrationReport{};
   const auto registration_start = std::chrono::steady_clock::now();
-  const Pose2 pose =
-      registering ? registration_.register_scan(scan, sensor_pose, out.registration) : *sensor_pose;
+  // What moves, for a laser-only registration (registration.leave_out_moving): the points near a
+  // dynamic track's outline, predicted to the scan's time.
+  const double stamp = scan.stamp_s;
+  const std::function<bool(const Eigen::Vector2d&)> moving =
+      [this, stamp](const Eigen::Vector2d& p) { return near_dynamic_track(p, stamp); };
+  const Pose2 pose = registering
+                         ? registration_.register_scan(scan, sensor_pose, out.registration, moving)
+                         : *sensor_pose;
   registration_us_ = registering ? microseconds_since(registration_start) : 0.0;
   if (registering) {
     counters_.scans_registered += out.registration.registered ? 1 : 0;
@@ -179,6 +186,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
     counters_.odometry_overruled += out.registration.odometry_overruled ? 1 : 0;
     counters_.scans_realigned += out.registration.realignments > 0 ? 1 : 0;
     counters_.registration_guess_limited += out.registration.guess_limited ? 1 : 0;
+    counters_.registration_held_sideways += out.registration.held_sideways ? 1 : 0;
   }
   out.sensor_pose = pose;
   previous_input_pose_ = sensor_pose;

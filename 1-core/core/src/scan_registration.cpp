@@ -45,6 +45,16 @@ constexpr int kMaxRealignments = 4;
 // Voxels hit by fewer scans than structure needs are forgotten when unseen this long (the trail
 // of someone walking by).
 constexpr double kTransientMemory_s = 2.0;
+// Laser-only heading (RegistrationConfig::lateral_noise_mps): the sensor's x axis counts as this
+// many scans at 1 m/s; a scan teaches the direction when it turned slower than kStraight_radps
+// and moved faster than kMoving_mps; the direction is clear when the scatter across it is at most
+// kClearShare of the scatter along it; the sideways motion per turn starts from none with the
+// weight of kPriorTurn2 (rad/s)^2 of turning.
+constexpr double kHeadingPriorScans = 10.0;
+constexpr double kStraight_radps = 0.2;
+constexpr double kMoving_mps = 0.2;
+constexpr double kClearShare = 0.1;
+constexpr double kPriorTurn2 = 1.0;
 
 }  // namespace
 
@@ -98,6 +108,10 @@ void RegistrationConfig::validate() const {
     reject("registration.velocity_smoothing", velocity_smoothing, "in (0, 1]");
   if (!(constant_velocity_noise_rad > 0.0))
     reject("registration.constant_velocity_noise_rad", constant_velocity_noise_rad, "> 0");
+  if (!(lateral_noise_mps >= 0.0 && lateral_noise_mps <= 10.0))
+    reject("registration.lateral_noise_mps", lateral_noise_mps, "in [0, 10]");
+  if (!(fallback_turn_decay_s >= 0.0 && fallback_turn_decay_s <= 3600.0))
+    reject("registration.fallback_turn_decay_s", fallback_turn_decay_s, "in [0, 3600]");
   if (!(explained_distance_m > 0.0 && explained_distance_m <= voxel_size_m))
     reject("registration.explained_distance_m", explained_distance_m, "in (0, voxel_size_m]");
 }
@@ -112,6 +126,43 @@ void ScanRegistration::reset() {
   previous_odometry_.reset();
   velocity_per_s_ = Pose2{};
   velocity_per_s_initialised_ = false;
+  sparse_ = true;
+}
+
+ScanRegistration::Heading::Heading() : sxx(kHeadingPriorScans) {}
+
+// The direction: the principal axis of the straight, moving scans' velocities (either way along
+// it). The sideways motion per turn: the sideways part of velocity x turn rate over turn rate
+// squared, summed over every registered scan (least squares through zero).
+void ScanRegistration::Heading::learn(const Pose2& motion_per_s) {
+  const Eigen::Vector2d v = motion_per_s.translation();
+  const double w = motion_per_s.yaw_rad;
+  if (!(v.allFinite() && std::isfinite(w))) return;
+  velocity_by_turn += w * v;
+  turn2 += w * w;
+  if (std::abs(w) < kStraight_radps && v.norm() > kMoving_mps) {
+    sxx += v.x() * v.x();
+    sxy += v.x() * v.y();
+    syy += v.y() * v.y();
+    const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
+    forward = Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    const double mean = 0.5 * (sxx + syy);
+    const double spread = std::sqrt(0.25 * (sxx - syy) * (sxx - syy) + sxy * sxy);
+    clear = mean - spread <= kClearShare * (mean + spread);
+  }
+  sideways_per_turn_m = velocity_by_turn.dot(sideways()) / (turn2 + kPriorTurn2);
+}
+
+double ScanRegistration::learnt_heading_rad() const {
+  return std::atan2(heading_.forward.y(), heading_.forward.x());
+}
+
+void ScanRegistration::hold_guess_sideways() {
+  const Eigen::Vector2d side = heading_.sideways();
+  Eigen::Vector2d v = velocity_per_s_.translation();
+  v += (heading_.sideways_per_turn_m * velocity_per_s_.yaw_rad - v.dot(side)) * side;
+  velocity_per_s_.x_m = v.x();
+  velocity_per_s_.y_m = v.y();
 }
 
 ScanRegistration::Key ScanRegistration::key_of(const Eigen::Vector2d& p) const {
@@ -432,6 +483,18 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
       seed_points_[i] = to_seed(local_points_[static_cast<std::size_t>(sample_[i])]);
     }
   }
+  // Laser-only: what is known to move is left out (leave_out_moving).
+  left_out_.assign(sample_.size(), 0);
+  std::size_t used = sample_.size();
+  if (leave_out_ != nullptr && *leave_out_) {
+    for (std::size_t i = 0; i < sample_.size(); ++i) {
+      if ((*leave_out_)(seed_points_[i])) {
+        left_out_[i] = 1;
+        --used;
+      }
+    }
+  }
+  report.left_out = static_cast<std::int32_t>(sample_.size() - used);
   nearby_.resize(sample_.size());  // Each filled at the first iteration.
   const double kappa = threshold / 3.0;
   const double threshold2 = threshold * threshold;
@@ -447,6 +510,7 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
     const PoseTransform to_fixed(pose);
     std::int32_t covered = 0;
     for (std::size_t i = 0; i < sample_.size(); ++i) {
+      if (left_out_[i] != 0) continue;
       const Eigen::Vector2d q = iteration == 0
                                     ? seed_points_[i]
                                     : to_fixed(local_points_[static_cast<std::size_t>(sample_[i])]);
@@ -525,10 +589,23 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
     const double prior_r = 1.0 / (sigma_r * sigma_r);
     const Eigen::Vector3d off(pose.x_m - seed.x_m, pose.y_m - seed.y_m,
                               wrap_angle(pose.yaw_rad - seed.yaw_rad));
-    h(0, 0) += prior_t;
-    h(1, 1) += prior_t;
+    if (sideways_sigma_m_ > 0.0 && !odometry) {
+      // Laser-only: along the learnt direction the guess's noise, sideways (beyond the turn's
+      // share, which the guess holds) sideways_sigma_m_; both turned into the fixed frame.
+      const Eigen::Vector2d side = PoseTransform(seed).rotate(heading_.sideways());
+      const Eigen::Matrix2d prior =
+          prior_t * (Eigen::Matrix2d::Identity() - side * side.transpose()) +
+          side * side.transpose() / (sideways_sigma_m_ * sideways_sigma_m_);
+      h.topLeftCorner<2, 2>() += prior;
+      g.head<2>() += prior * off.head<2>();
+      report.held_sideways = true;
+    } else {
+      h(0, 0) += prior_t;
+      h(1, 1) += prior_t;
+      g.head<2>() += prior_t * off.head<2>();
+    }
     h(2, 2) += prior_r;
-    g += Eigen::Vector3d(prior_t * off.x(), prior_t * off.y(), prior_r * off.z());
+    g(2) += prior_r * off.z();
     const Eigen::Vector3d step = -h.ldlt().solve(g);
     if (!step.allFinite()) break;
     pose.x_m += step.x();
@@ -545,7 +622,7 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
   const bool enough = inliers >= (report.seeded_by_odometry ? config_.min_points_with_odometry
                                                             : config_.min_points);
   report.inlier_share =
-      static_cast<double>(inliers) / static_cast<double>(std::max<std::size_t>(1, sample_.size()));
+      static_cast<double>(inliers) / static_cast<double>(std::max<std::size_t>(1, used));
   report.residual_m = inliers > 0 ? std::sqrt(sum_e2 / inliers) : 0.0;
   // Degeneracy: the translation information's eigenvalues (closed form, 2x2 symmetric).
   const double a = h_data(0, 0), b = h_data(0, 1), d = h_data(1, 1);
@@ -568,12 +645,18 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
 
 Pose2 ScanRegistration::register_scan(const LaserScan& scan,
                                       const std::optional<Pose2>& odometry_pose,
-                                      RegistrationReport& report) {
+                                      RegistrationReport& report,
+                                      const std::function<bool(const Eigen::Vector2d&)>& moving) {
   report = RegistrationReport{};
+  leave_out_ = !odometry_pose && config_.leave_out_moving ? &moving : nullptr;
   alignments_ = total_iterations_ = 0;
   ++scan_count_;
   explaining_valid_ = false;
   const double dt = have_previous_ ? scan.stamp_s - previous_stamp_s_ : 0.0;
+  sideways_sigma_m_ =
+      !odometry_pose && config_.lateral_noise_mps > 0.0 && heading_.clear && dt > 0.0 && sparse_
+          ? config_.lateral_noise_mps * dt
+          : 0.0;
   // The seed: the odometry's motion since the previous scan, else constant velocity.
   Pose2 seed, delta;
   if (!have_previous_) {
@@ -702,7 +785,23 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
     }
     velocity_per_s_.yaw_rad =
         std::clamp(velocity_per_s_.yaw_rad, -limits_.turn_rate_radps, limits_.turn_rate_radps);
+    if (!odometry_pose) {
+      if (report.fallback && config_.fallback_turn_decay_s > 0.0) {
+        velocity_per_s_.yaw_rad *= std::exp(-dt / config_.fallback_turn_decay_s);
+      }
+      // Learnt only from scans that matched as many points as a scan seeded by odometry must:
+      // with fewer, the registered motion is as likely the sparse scene's error (a turn about a
+      // point ahead, sliding sideways) as the robot's.
+      const double matched = report.inlier_share * (report.points - report.left_out);
+      const bool rich = report.registered && matched >= config_.min_points_with_odometry;
+      if (rich && !report.degenerate) {
+        heading_.learn(Pose2{moved.x_m / dt, moved.y_m / dt, moved.yaw_rad / dt});
+      }
+      sparse_ = !rich;
+      if (config_.lateral_noise_mps > 0.0 && heading_.clear && sparse_) hold_guess_sideways();
+    }
   }
+  leave_out_ = nullptr;  // @p moving lives for this call only.
   report.alignments = alignments_;
   report.total_iterations = total_iterations_;
   previous_pose_ = pose;

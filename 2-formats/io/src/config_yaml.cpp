@@ -218,6 +218,9 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   b.number("registration.explained_distance_m", g.explained_distance_m);
   b.number("registration.explained_max_age_s", g.explained_max_age_s);
   b.boolean("registration.deskew", g.deskew);
+  b.number("registration.lateral_noise_mps", g.lateral_noise_mps);
+  b.number("registration.fallback_turn_decay_s", g.fallback_turn_decay_s);
+  b.boolean("registration.leave_out_moving", g.leave_out_moving);
   b.number("max_time_gap_s", c.max_time_gap_s);
   b.number("max_pose_jump_m", c.max_pose_jump_m);
   b.number("max_pose_jump_rad", c.max_pose_jump_rad);

@@ -73,6 +73,10 @@ void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d
   EXPECT_EQ(loaded.free_space.neighbourhood_cells, d.free_space.neighbourhood_cells);
   EXPECT_EQ(loaded.free_space.min_object_share, d.free_space.min_object_share);
   EXPECT_EQ(loaded.free_space.mark_beside_dynamic, d.free_space.mark_beside_dynamic);
+  EXPECT_EQ(loaded.registration.deskew, d.registration.deskew);
+  EXPECT_EQ(loaded.registration.lateral_noise_mps, d.registration.lateral_noise_mps);
+  EXPECT_EQ(loaded.registration.fallback_turn_decay_s, d.registration.fallback_turn_decay_s);
+  EXPECT_EQ(loaded.registration.leave_out_moving, d.registration.leave_out_moving);
   EXPECT_EQ(loaded.max_time_gap_s, d.max_time_gap_s);
   EXPECT_EQ(loaded.max_pose_jump_m, d.max_pose_jump_m);
   EXPECT_EQ(loaded.max_pose_jump_rad, d.max_pose_jump_rad);

@@ -86,7 +86,8 @@ struct FilterCounters {
   /// because the odometry slipped (RegistrationReport::odometry_overruled), and scans de-skewed
   /// by their registered turn and aligned again (RegistrationReport::realignments), and scans
   /// after which the constant-velocity guess was held at the robot's limits
-  /// (RegistrationReport::guess_limited).
+  /// (RegistrationReport::guess_limited), and laser-only scans whose sideways motion was held
+  /// (RegistrationReport::held_sideways).
   std::int64_t scans_registered = 0;
   std::int64_t registration_fallbacks = 0;
   std::int64_t registration_degenerate = 0;
@@ -94,6 +95,7 @@ struct FilterCounters {
   std::int64_t odometry_overruled = 0;
   std::int64_t scans_realigned = 0;
   std::int64_t registration_guess_limited = 0;
+  std::int64_t registration_held_sideways = 0;
   /// Voxels of the registered map started afresh: hit again after a time unseen where the
   /// scanner had long seen through (ScanRegistration::add()).
   std::int64_t map_voxels_restarted = 0;

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "dispel/core/integer_key_map.hpp"
@@ -75,6 +76,24 @@ struct RegistrationConfig {
   /// Beams are de-skewed by their time_increment with the odometry's motion since the previous
   /// scan (never by a constant-velocity guess: its error fed back into the registration).
   bool deskew = true;
+  /// Laser-only (no odometry): a wheeled robot drives along one direction of the sensor frame and
+  /// does not slide sideways; a turn moves a sensor mounted off the axle sideways by an amount in
+  /// proportion to the turn. Both are learnt from the scans that register (the direction along
+  /// which they moved while driving straight, the sideways motion per turn), starting from the
+  /// sensor's x axis. Each alignment then holds the sideways motion beyond the turn's share to
+  /// this noise (m/s), and the constant-velocity guess keeps none. With little structure (a
+  /// narrow view outdoors, a person walking ahead) the scans registered 1 m/s sideways and turning
+  /// 14-20 degrees/s within 2 s of a straight drive. 0: off (any motion in the plane).
+  double lateral_noise_mps = 0.1;
+  /// Laser-only: on a scan that does not register (a fallback), the guess's turn decays with this
+  /// time constant (s): without evidence a turn does not go on, and a guessed turn carried
+  /// through a run of fallbacks spun the registered pose a full circle. 0: off (carried on).
+  double fallback_turn_decay_s = 0.25;
+  /// Laser-only: the points of what the filter tracks as moving (register_scan()'s @p moving)
+  /// are left out of the alignments. A person walked 1.7 m ahead of a robot following them, half
+  /// of what the scanner saw: registered to, they held the robot back (the registered pace 0.8-1.1
+  /// m/s against their 1.4-1.5). false: every point counts.
+  bool leave_out_moving = true;
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -92,10 +111,14 @@ struct RegistrationReport {
   /// The constant-velocity guess, brought up to date with this scan's motion, was faster than the
   /// robot can drive (SpeedLimits) and was held at the limit.
   bool guess_limited = false;
+  /// Laser-only: the alignment held the sensor's sideways motion (RegistrationConfig::
+  /// lateral_noise_mps) along the direction learnt so far.
+  bool held_sideways = false;
   /// Times the scan was de-skewed by its registered turn and aligned again: the turn it was first
   /// de-skewed by (the odometry's, or the guess's) bent it (a slip starts or ends within a scan).
   std::int32_t realignments = 0;
   std::int32_t points = 0;      ///< Points of the thinned scan.
+  std::int32_t left_out = 0;    ///< Of them, left out as moving (leave_out_moving).
   std::int32_t iterations = 0;  ///< Of the alignment kept.
   /// Alignments tried for the scan (the odometry's seed, the guess's after a slip, realignments)
   /// and their iterations together: the registration's work.
@@ -129,9 +152,12 @@ class ScanRegistration {
   /// within SpeedLimits). Returns the sensor's pose in the registration's fixed frame (the
   /// odometry frame at the first scan, or the first scan's sensor frame when there is no
   /// odometry). Fills the scan's points in that
-  /// frame (points(): one per beam, de-skewed; NaN for invalid beams).
+  /// frame (points(): one per beam, de-skewed; NaN for invalid beams). Laser-only, with
+  /// leave_out_moving, a point for which @p moving (in the fixed frame, where the seed puts it)
+  /// is true is left out of the alignments (empty: none).
   Pose2 register_scan(const LaserScan& scan, const std::optional<Pose2>& odometry_pose,
-                      RegistrationReport& report);
+                      RegistrationReport& report,
+                      const std::function<bool(const Eigen::Vector2d&)>& moving = {});
 
   /// The last registered scan's beams in the fixed frame (NaN where invalid).
   const std::vector<Eigen::Vector2d>& points() const { return world_points_; }
@@ -160,6 +186,9 @@ class ScanRegistration {
   std::size_t voxel_count() const { return map_.size(); }
   /// Voxels started afresh by add() since the start (see its long_free).
   std::int64_t voxels_restarted() const { return voxels_restarted_; }
+  /// Laser-only: the direction the sensor moves along (radians in the sensor frame, either way
+  /// along it), as learnt so far (0 before any scan registered: the x axis).
+  double learnt_heading_rad() const;
   const RegistrationConfig& config() const { return config_; }
 
  private:
@@ -220,8 +249,27 @@ class ScanRegistration {
   Eigen::Vector2d normal_at(std::size_t b) const;
   Eigen::Vector2d map_normal(const Voxel& voxel, std::uint8_t slot);
 
+  // Laser-only: how the sensor moves on its robot, learnt from the registered motion (see
+  // lateral_noise_mps). The x axis's prior counts as kPriorScans scans at 1 m/s.
+  struct Heading {
+    double sxx = 0.0, sxy = 0.0, syy = 0.0;  // Scatter of the straight, moving scans' velocity.
+    Eigen::Vector2d velocity_by_turn = Eigen::Vector2d::Zero();  // Sum of velocity x turn rate.
+    double turn2 = 0.0;                                          // Sum of turn rate squared.
+    Eigen::Vector2d forward = Eigen::Vector2d::UnitX();
+    double sideways_per_turn_m = 0.0;  // Sideways velocity per rad/s of turn (m).
+    bool clear = true;                 // The direction stands out (see learn()).
+    Heading();
+    void learn(const Pose2& motion_per_s);
+    Eigen::Vector2d sideways() const { return {-forward.y(), forward.x()}; }
+  };
+  // The constant-velocity guess without the sideways motion its turn does not explain.
+  void hold_guess_sideways();
+
   RegistrationConfig config_;
   SpeedLimits limits_;
+  Heading heading_;
+  double sideways_sigma_m_ = 0.0;  // This scan's alignments hold sideways motion to this (0: not).
+  bool sparse_ = true;  // Laser-only: the last scan matched fewer than min_points_with_odometry.
   IntegerKeyMap<Voxel> map_;
   std::int64_t voxels_restarted_ = 0;
   std::uint32_t scan_count_ = 0;
@@ -247,6 +295,8 @@ class ScanRegistration {
   // The alignment's candidates (see nearest_candidate()): each sample point at the seed, the
   // voxels around it, how far, and whether only structure counts.
   std::vector<Eigen::Vector2d> seed_points_;
+  const std::function<bool(const Eigen::Vector2d&)>* leave_out_ = nullptr;  // This scan's.
+  std::vector<char> left_out_;  // Per sample point: left out of the alignments.
   int reach_ = 0;
   double radius_ = 0.0;
   bool structure_only_ = true;

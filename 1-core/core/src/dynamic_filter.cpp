@@ -171,9 +171,16 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   const auto registration_start = std::chrono::steady_clock::now();
   // What moves, for a laser-only registration (registration.leave_out_moving): the points near a
   // dynamic track's outline, predicted to the scan's time.
+  // Asked per sample point: only when there is such a track (most scans of a recording without
+  // people have none).
   const double stamp = scan.stamp_s;
-  const std::function<bool(const Eigen::Vector2d&)> moving =
-      [this, stamp](const Eigen::Vector2d& p) { return near_dynamic_track(p, stamp); };
+  const bool any_moving = std::any_of(tracks_.begin(), tracks_.end(), [](const Track& t) {
+    return t.cls.object_class == ObjectClass::kDynamic && t.missed_scans <= kFragmentMaxMissed;
+  });
+  std::function<bool(const Eigen::Vector2d&)> moving;
+  if (any_moving) {
+    moving = [this, stamp](const Eigen::Vector2d& p) { return near_dynamic_track(p, stamp); };
+  }
   const Pose2 pose = registering
                          ? registration_.register_scan(scan, sensor_pose, out.registration, moving)
                          : *sensor_pose;

@@ -108,8 +108,8 @@ void RegistrationConfig::validate() const {
     reject("registration.velocity_smoothing", velocity_smoothing, "in (0, 1]");
   if (!(constant_velocity_noise_rad > 0.0))
     reject("registration.constant_velocity_noise_rad", constant_velocity_noise_rad, "> 0");
-  if (!(lateral_noise_mps >= 0.0 && lateral_noise_mps <= 10.0))
-    reject("registration.lateral_noise_mps", lateral_noise_mps, "in [0, 10]");
+  if (!(lateral_noise_mps == 0.0 || (lateral_noise_mps >= 0.001 && lateral_noise_mps <= 10.0)))
+    reject("registration.lateral_noise_mps", lateral_noise_mps, "0 (off) or in [0.001, 10]");
   if (!(fallback_turn_decay_s >= 0.0 && fallback_turn_decay_s <= 3600.0))
     reject("registration.fallback_turn_decay_s", fallback_turn_decay_s, "in [0, 3600]");
   if (!(explained_distance_m > 0.0 && explained_distance_m <= voxel_size_m))

@@ -511,6 +511,8 @@ TEST(ScanRegistration, BadConfigurationsNameTheField) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("registration.lateral_noise_mps"), std::string::npos);
   }
+  c.lateral_noise_mps = 1e-300;  // Would pin the sideways motion with an infinite weight.
+  EXPECT_THROW(ScanRegistration{c}, std::invalid_argument);
   c = RegistrationConfig{};
   c.fallback_turn_decay_s = std::numeric_limits<double>::infinity();
   EXPECT_THROW(ScanRegistration{c}, std::invalid_argument);

@@ -117,10 +117,11 @@ Errors run(const sim::SimulationOutput& out, const sim::Scenario& s, bool with_o
 // error. The 1 cm target is not reached; the error is along the corridors (docs/results.md,
 // "Registration"). Laser-only on seed 1: 3.4 cm and 0.62 degrees over 1 s (its scans are not
 // de-skewed), 0.14 m after 100 m (4.0 cm, 0.61 degrees and 0.12 m before the laser-only rules of
-// RegistrationConfig::lateral_noise_mps: the first scans, whose map is young, hold sideways). (Seeded, before the map's own normals for far walls: 1.6 cm, 0.11
-// degrees, 0.09 m; with the odometry's last sample before each scan instead of its value at the
-// scan's stamp: 1.6 cm, 0.12 degrees, 0.007 m; before the simulated robot rounded its corners: 1.7
-// cm, 0.17 degrees, 0.03 m; laser-only 6.4 cm, 0.61 degrees, 0.05 m.)
+// RegistrationConfig::lateral_noise_mps: the first scans, whose map is young, hold sideways).
+// (Seeded, before the map's own normals for far walls: 1.6 cm, 0.11 degrees, 0.09 m; with the
+// odometry's last sample before each scan instead of its value at the scan's stamp: 1.6 cm, 0.12
+// degrees, 0.007 m; before the simulated robot rounded its corners: 1.7 cm, 0.17 degrees, 0.03 m;
+// laser-only 6.4 cm, 0.61 degrees, 0.05 m.)
 TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
   // DISPEL_REGISTRATION_SEEDS=N runs seeds 1 to N (docs/results.md: seed 1 alone is not the
   // registration's error) and prints each seed's figures and their means; CI runs seed 1.

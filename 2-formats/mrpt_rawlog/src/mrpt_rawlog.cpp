@@ -169,6 +169,7 @@ std::string container_count_error(const std::string& bytes, std::size_t pos) {
   const std::size_t version_at = pos + 1 + name_length;
   if (version_at >= bytes.size()) return {};
   std::string name = bytes.substr(pos + 1, name_length);
+  name.erase(std::min(name.find('\0'), name.size()));  // MRPT reads it up to its first NUL.
   // MRPT 2 writes the class's full name (mrpt::obs::CSensoryFrame), older MRPT the short one.
   const std::size_t colons = name.rfind("::");
   if (colons != std::string::npos) name.erase(0, colons + 2);
@@ -192,20 +193,37 @@ std::string container_count_error(const std::string& bytes, std::size_t pos) {
          std::to_string(left) + " bytes left";
 }
 
-// Where a stored object of class @p name starts when its name is at @p at: the header byte
-// before it (0x80 | the stored name's length), the name alone or after @p space ("mrpt::math::").
-// npos when the bytes there are not such a header.
-std::size_t object_start(const std::string& bytes, std::size_t at, const std::string& name,
-                         const std::string& space) {
-  if (at >= 1 && static_cast<unsigned char>(bytes[at - 1]) == (0x80U | name.size())) {
-    return at - 1;
+// A stored object of class @p name whose name is at @p at: where it starts (the header byte
+// before the name, 0x80 | the stored name's length; the name alone or after @p space,
+// "mrpt::math::") and where its version byte is. MRPT takes the stored name as a C string, up to
+// its first NUL, so a stored name longer than the class's is the class when a NUL follows it (the
+// fuzzer: a CMatrixD stored under a 40-byte name, its rows and columns 32 bytes later than under
+// an 8-byte one). {npos, npos} when the bytes there are not such a header.
+struct StoredObject {
+  std::size_t start = std::string::npos;
+  std::size_t version_at = std::string::npos;
+};
+StoredObject stored_object(const std::string& bytes, std::size_t at, const std::string& name,
+                           const std::string& space) {
+  const auto header = [&](std::size_t start, std::size_t name_length) -> StoredObject {
+    const auto head = static_cast<unsigned char>(bytes[start]);
+    const std::size_t stored = head & 0x7FU;
+    const std::size_t after_name = start + 1 + name_length;
+    if ((head & 0x80U) == 0 || stored < name_length || start + 1 + stored >= bytes.size() ||
+        (stored > name_length && bytes[after_name] != '\0')) {
+      return {};
+    }
+    return {start, start + 1 + stored};
+  };
+  if (at >= 1) {
+    const StoredObject o = header(at - 1, name.size());
+    if (o.start != std::string::npos) return o;
   }
   const std::string full = space + name;
-  if (at >= space.size() + 1 && bytes.compare(at - space.size(), full.size(), full) == 0 &&
-      static_cast<unsigned char>(bytes[at - space.size() - 1]) == (0x80U | full.size())) {
-    return at - space.size() - 1;
+  if (at >= space.size() + 1 && bytes.compare(at - space.size(), full.size(), full) == 0) {
+    return header(at - space.size() - 1, full.size());
   }
-  return std::string::npos;
+  return {};
 }
 
 // The stored object's class name at @p pos (without its namespace), and where its version byte
@@ -217,6 +235,7 @@ std::pair<std::string, std::size_t> object_header(const std::string& bytes, std:
   const std::size_t version_at = pos + 1 + (head & 0x7FU);
   if (version_at >= bytes.size()) return {};
   std::string name = bytes.substr(pos + 1, head & 0x7FU);
+  name.erase(std::min(name.find('\0'), name.size()));  // MRPT reads it up to its first NUL.
   const std::size_t colons = name.rfind("::");
   if (colons != std::string::npos) name.erase(0, colons + 2);
   return {name, version_at};
@@ -239,8 +258,7 @@ std::string oversized_matrix_error(const std::string& bytes) {
     const std::string name = kind.name;
     for (std::size_t at = bytes.find(name); at != std::string::npos;
          at = bytes.find(name, at + 1)) {
-      const std::size_t start = object_start(bytes, at, name, "mrpt::math::");
-      const std::size_t version_at = at + name.size();
+      const auto [start, version_at] = stored_object(bytes, at, name, "mrpt::math::");
       if (start == std::string::npos || version_at + 9 > bytes.size() || bytes[version_at] != 0) {
         continue;
       }
@@ -283,8 +301,7 @@ constexpr std::uint32_t kMaxParticles = 100000;
 std::string movement_error(const std::string& bytes) {
   const std::string name = "CActionRobotMovement2D";
   for (std::size_t at = bytes.find(name); at != std::string::npos; at = bytes.find(name, at + 1)) {
-    const std::size_t start = object_start(bytes, at, name, "mrpt::obs::");
-    const std::size_t version_at = at + name.size();
+    const auto [start, version_at] = stored_object(bytes, at, name, "mrpt::obs::");
     if (start == std::string::npos || version_at + 5 > bytes.size()) continue;
     const auto version = static_cast<unsigned char>(bytes[version_at]);
     if (version < 4 || version > 7) continue;

@@ -261,6 +261,18 @@ TEST_F(MrptRawlogSena, MatricesLargerThanTheLogAreRefusedBeforeMrptReadsThem) {
                 ": not a readable MRPT rawlog (a CMatrixD of 262144 x 1291845636 values at byte "
                 "62, more than the " +
                 std::to_string(bytes.size() - 80) + " bytes after it)");
+  // The same matrix under a stored name of 12 bytes, "CMatrixD" and 4 NULs: MRPT reads the name
+  // up to its first NUL and the matrix after the 12 (the fuzzer: a 40-byte name, a SIGSEGV the
+  // check above missed while it took the name's length for the class's).
+  std::string padded = bytes;
+  padded[62] = '\x8c';
+  padded.insert(71, std::string(4, '\0'));
+  padded.replace(76, 8, std::string("\x00\x00\x04\x00\x04\x00\x00\x4d", 8));
+  EXPECT_EQ(open_error(write_text("matrix_padded_name.rawlog", padded)),
+            temp_path("matrix_padded_name.rawlog") +
+                ": not a readable MRPT rawlog (a CMatrixD of 262144 x 1291845636 values at byte "
+                "62, more than the " +
+                std::to_string(padded.size() - 84) + " bytes after it)");
   // 4 x 5 doubles: more than the bytes after it only at the log's end, so MRPT reads it (and
   // finds the log corrupt).
   matrix.replace(72, 8, std::string("\x04\x00\x00\x00\x05\x00\x00\x00", 8));

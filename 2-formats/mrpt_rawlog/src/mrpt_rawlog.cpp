@@ -254,7 +254,9 @@ std::string oversized_matrix_error(const std::string& bytes) {
     const char* name;
     std::size_t value_bytes;
   };
-  for (const Kind kind : {Kind{"CMatrixD", 8}, Kind{"CMatrixF", 4}}) {
+  // "CMatrix" is MRPT 1's name of CMatrixF, which MRPT 2 still reads as one (the fuzzer: a
+  // stored name "CMatrix" and a NUL, a top-level object).
+  for (const Kind kind : {Kind{"CMatrixD", 8}, Kind{"CMatrixF", 4}, Kind{"CMatrix", 4}}) {
     const std::string name = kind.name;
     for (std::size_t at = bytes.find(name); at != std::string::npos;
          at = bytes.find(name, at + 1)) {

@@ -154,6 +154,21 @@ std::uint32_t u32_at(const std::string& bytes, std::size_t at) {
   return v;
 }
 
+// The stored object's class name at @p pos (without its namespace), and where its version byte
+// is; empty when there is no header of MRPT 2's form there.
+std::pair<std::string, std::size_t> object_header(const std::string& bytes, std::size_t pos) {
+  if (pos >= bytes.size()) return {};
+  const auto head = static_cast<unsigned char>(bytes[pos]);
+  if ((head & 0x80U) == 0) return {};
+  const std::size_t version_at = pos + 1 + (head & 0x7FU);
+  if (version_at >= bytes.size()) return {};
+  std::string name = bytes.substr(pos + 1, head & 0x7FU);
+  name.erase(std::min(name.find('\0'), name.size()));  // MRPT reads it up to its first NUL.
+  const std::size_t colons = name.rfind("::");
+  if (colons != std::string::npos) name.erase(0, colons + 2);
+  return {name, version_at};
+}
+
 // MRPT sizes a container from the count it reads before it reads any element: a CSensoryFrame
 // of 0x746e0001 observations had a deque of 31 GiB of pointers made and zeroed, page by page,
 // from a 1.7 kB file (the fuzzer, in its first minute). The counts of the two containers a log's
@@ -162,17 +177,9 @@ std::uint32_t u32_at(const std::string& bytes, std::size_t at) {
 // length of the class's name, the name, a version byte, the object's fields. The check's message,
 // or empty when the object at @p pos is not one of these (MRPT reads and checks the rest).
 std::string container_count_error(const std::string& bytes, std::size_t pos) {
-  if (pos >= bytes.size()) return {};
-  const auto head = static_cast<unsigned char>(bytes[pos]);
-  if ((head & 0x80U) == 0) return {};
-  const std::size_t name_length = head & 0x7FU;
-  const std::size_t version_at = pos + 1 + name_length;
-  if (version_at >= bytes.size()) return {};
-  std::string name = bytes.substr(pos + 1, name_length);
-  name.erase(std::min(name.find('\0'), name.size()));  // MRPT reads it up to its first NUL.
   // MRPT 2 writes the class's full name (mrpt::obs::CSensoryFrame), older MRPT the short one.
-  const std::size_t colons = name.rfind("::");
-  if (colons != std::string::npos) name.erase(0, colons + 2);
+  const auto [name, version_at] = object_header(bytes, pos);
+  if (name.empty()) return {};
   const auto version = static_cast<unsigned char>(bytes[version_at]);
   std::size_t count_at = 0;
   const char* what = nullptr;
@@ -224,21 +231,6 @@ StoredObject stored_object(const std::string& bytes, std::size_t at, const std::
     return header(at - space.size() - 1, full.size());
   }
   return {};
-}
-
-// The stored object's class name at @p pos (without its namespace), and where its version byte
-// is; empty when there is no header of MRPT 2's form there.
-std::pair<std::string, std::size_t> object_header(const std::string& bytes, std::size_t pos) {
-  if (pos >= bytes.size()) return {};
-  const auto head = static_cast<unsigned char>(bytes[pos]);
-  if ((head & 0x80U) == 0) return {};
-  const std::size_t version_at = pos + 1 + (head & 0x7FU);
-  if (version_at >= bytes.size()) return {};
-  std::string name = bytes.substr(pos + 1, head & 0x7FU);
-  name.erase(std::min(name.find('\0'), name.size()));  // MRPT reads it up to its first NUL.
-  const std::size_t colons = name.rfind("::");
-  if (colons != std::string::npos) name.erase(0, colons + 2);
-  return {name, version_at};
 }
 
 // MRPT makes a matrix object's storage (rows x cols, with its aligned allocator) before it reads

@@ -236,29 +236,35 @@ StoredObject stored_object(const std::string& bytes, std::size_t at, const std::
 // MRPT makes a matrix object's storage (rows x cols, with its aligned allocator) before it reads
 // the values, and does not check the allocation: when it cannot be made MRPT writes through a
 // null pointer (SIGSEGV, with or without ASan: a CMatrixD of 262144 x 1291845636 doubles, the
-// mount pose of a scan, from the fuzzer). Every stored CMatrixD and CMatrixF object (version 0:
-// rows, cols, the values) is found in the log's bytes, at any depth, and one with more values
-// than the bytes after it refuses the log before MRPT reads any of it. (The 9 or more bytes of a
+// mount pose of a scan, from the fuzzer). Every stored CMatrixD, CMatrixF and CMatrixB object
+// (version 0: rows, cols, the values; CMatrixB stores the size of a bool before them) is found in
+// the log's bytes, at any depth, and one with more values than the bytes after it refuses the log
+// before MRPT reads any of it. (The 9 or more bytes of a
 // matrix's header are not checked for where they stand; inside another field's bytes they would
 // be a coincidence of 2^-72 per byte.) The check's message, or empty.
 std::string oversized_matrix_error(const std::string& bytes) {
   struct Kind {
     const char* name;
     std::size_t value_bytes;
+    std::size_t before_rows;  // Bytes between the version byte and the rows.
   };
-  // "CMatrix" is MRPT 1's name of CMatrixF, which MRPT 2 still reads as one (the fuzzer: a
-  // stored name "CMatrix" and a NUL, a top-level object).
-  for (const Kind kind : {Kind{"CMatrixD", 8}, Kind{"CMatrixF", 4}, Kind{"CMatrix", 4}}) {
+  // The names MRPT 2 registers for its matrix classes (libs/math's registerAllClasses): "CMatrix"
+  // is MRPT 1's name of CMatrixF, which MRPT 2 still reads as one (the fuzzer: a stored name
+  // "CMatrix" and a NUL, a top-level object). A CMatrixB of 4294963200 x 1024 bools was the same
+  // SIGSEGV (reading its class after that finding).
+  for (const Kind kind : {Kind{"CMatrixD", 8, 0}, Kind{"CMatrixF", 4, 0}, Kind{"CMatrix", 4, 0},
+                          Kind{"CMatrixB", 1, 4}}) {
     const std::string name = kind.name;
     for (std::size_t at = bytes.find(name); at != std::string::npos;
          at = bytes.find(name, at + 1)) {
       const auto [start, version_at] = stored_object(bytes, at, name, "mrpt::math::");
-      if (start == std::string::npos || version_at + 9 > bytes.size() || bytes[version_at] != 0) {
+      const std::size_t rows_at = version_at + 1 + kind.before_rows;
+      if (start == std::string::npos || rows_at + 8 > bytes.size() || bytes[version_at] != 0) {
         continue;
       }
-      const std::uint64_t rows = u32_at(bytes, version_at + 1);
-      const std::uint64_t cols = u32_at(bytes, version_at + 5);
-      const std::uint64_t left = bytes.size() - (version_at + 9);
+      const std::uint64_t rows = u32_at(bytes, rows_at);
+      const std::uint64_t cols = u32_at(bytes, rows_at + 4);
+      const std::uint64_t left = bytes.size() - (rows_at + 8);
       // rows * cols * value_bytes may not fit in 64 bits (2^32 * 2^32 * 8): divided instead.
       if (rows == 0 || cols <= left / kind.value_bytes / rows) continue;
       return "a " + name + " of " + std::to_string(rows) + " x " + std::to_string(cols) +

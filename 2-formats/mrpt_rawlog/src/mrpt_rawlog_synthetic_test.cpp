@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/io/CFileOutputStream.h>
+#include <mrpt/math/CMatrixB.h>
+#include <mrpt/math/CMatrixD.h>
+#include <mrpt/math/CMatrixF.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CActionRobotMovement2D.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
@@ -308,6 +311,54 @@ TEST(MrptRawlogSynthetic, AWholeCRawlogIsReadAsTheLogsOwnEntries) {
             abstract +
                 ": not a readable MRPT rawlog (action 1 of a CActionCollection is 'CAction', not "
                 "an action MRPT can make)");
+}
+
+// MRPT makes a matrix's storage before it reads its values and writes through the null pointer it
+// gets when the allocation fails (SIGSEGV). Each matrix class MRPT 2 reads, written by MRPT as a
+// top-level object, its size then stated as 4294963200 x 1024: refused before MRPT reads it,
+// under MRPT 2's name and under the names MRPT reads as the same class (MRPT 1's "CMatrix" for a
+// CMatrixF, NUL-padded as the fuzzer stored it).
+TEST(MrptRawlogSynthetic, MatricesOfEveryClassMrptReadsAreCheckedBeforeItReadsThem) {
+  const auto written = [](const std::string& file, const auto& matrix) {
+    const std::string path = temp_path(file);
+    {
+      mrpt::io::CFileOutputStream out(path);
+      mrpt::serialization::archiveFrom(out) << matrix;
+    }
+    return test::read_bytes(path);
+  };
+  struct Case {
+    std::string bytes;
+    std::string name;        // As MRPT 2 stores it.
+    std::size_t rows_after;  // Bytes between the version and the rows.
+  };
+  const std::vector<Case> cases = {
+      {written("d.rawlog", mrpt::math::CMatrixD(2, 3)), "mrpt::math::CMatrixD", 0},
+      {written("f.rawlog", mrpt::math::CMatrixF(2, 3)), "mrpt::math::CMatrixF", 0},
+      {written("b.rawlog", mrpt::math::CMatrixB(2, 3)), "mrpt::math::CMatrixB", 4}};
+  for (const Case& c : cases) {
+    const std::string header = std::string(1, static_cast<char>(0x80 | c.name.size())) + c.name;
+    ASSERT_EQ(c.bytes.substr(0, header.size()), header);
+    const std::size_t rows_at = header.size() + 1 + c.rows_after;
+    ASSERT_EQ(c.bytes.substr(rows_at, 8), std::string("\x02\x00\x00\x00\x03\x00\x00\x00", 8));
+    EXPECT_EQ(open_error(test::write_text("fine_" + c.name.substr(12) + ".rawlog", c.bytes)),
+              "read")
+        << c.name;
+    std::vector<std::pair<std::string, std::string>> named = {{c.name.substr(12), c.bytes}};
+    if (c.name == "mrpt::math::CMatrixF") {
+      std::string old_name = c.bytes;
+      old_name.replace(1, c.name.size(), std::string("CMatrix") + std::string(13, '\0'));
+      named.emplace_back("CMatrix", old_name);
+    }
+    for (auto& [shown, bytes] : named) {
+      bytes.replace(rows_at, 8, std::string("\x00\xf0\xff\xff\x00\x04\x00\x00", 8));
+      const std::string path = test::write_text("huge_" + shown + ".rawlog", bytes);
+      EXPECT_EQ(open_error(path), path + ": not a readable MRPT rawlog (a " + shown +
+                                      " of 4294963200 x 1024 values at byte 0, more than the " +
+                                      std::to_string(bytes.size() - rows_at - 8) +
+                                      " bytes after it)");
+    }
+  }
 }
 
 }  // namespace

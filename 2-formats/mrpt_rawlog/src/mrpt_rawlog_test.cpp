@@ -208,6 +208,27 @@ TEST_F(MrptRawlogSena, TruncatedOrCorruptUncompressedCopiesAreRefused) {
   }
 }
 
+// MRPT takes a short read for a whole one and keeps what the rest of the field held (a matrix's
+// columns cut after 2 of their 4 bytes took 2 from the stack: a SIGSEGV, from the fuzzer). A log
+// cut inside a field is refused as cut: inside the class name of the first scan's mount matrix
+// (2 of its 8 letters: MRPT said "Cannot read object class name from stream!"), inside its
+// columns, and inside the first sensory frame's count of observations.
+TEST_F(MrptRawlogSena, ALogCutInsideAFieldIsRefusedAsCut) {
+  const std::string bytes = uncompressed(kSena);
+  ASSERT_EQ(bytes.substr(62, 18), std::string("\x88"
+                                              "CMatrixD\x00\x04\x00\x00\x00\x04\x00\x00\x00",
+                                              18));
+  for (const std::size_t cut : {std::size_t{65}, std::size_t{78}, std::size_t{17}}) {
+    const std::string path =
+        write_text("cut_in_field_" + std::to_string(cut) + ".rawlog", bytes.substr(0, cut));
+    EXPECT_EQ(open_error(path),
+              path +
+                  ": not a readable MRPT rawlog ((EOF?) Cannot read requested number of bytes "
+                  "from stream)")
+        << cut;
+  }
+}
+
 // Bytes changed in a compressed log fail gzip's check. (An uncompressed log has no check: a
 // changed range is read as that range.)
 TEST_F(MrptRawlogSena, CorruptCompressedCopyIsRefused) {

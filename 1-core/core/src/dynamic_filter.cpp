@@ -62,6 +62,10 @@ constexpr double kStillRadius_m = 0.15;
 // An object whose beams the registered map explains by at least this share is a surface that has
 // stood there: whatever its outline does, it is not moving.
 constexpr double kExplainedShare = 0.5;
+// The sensor's velocity (registration.slide_tolerance_mps) is smoothed over this time constant.
+constexpr double kSensorVelocityTime_s = 0.3;
+// An explained object shorter than this has no direction along itself to slide in.
+constexpr double kSlideMinExtent_m = 0.5;
 
 // An object that has stood still in the sensor frame (within kAttachedTolerance_m) for
 // kAttachedTime_s, within kAttachedRange_m of the sensor, is part of the robot or carried by it (a
@@ -216,6 +220,15 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
         (sensor_pose || (out.registration.registered && !out.registration.degenerate))) {
       learn_body(scan, out.segmentation);
     }
+    if (have_previous_ && scan.stamp_s > previous_stamp_s_) {
+      const double dt = scan.stamp_s - previous_stamp_s_;
+      const Eigen::Vector2d v = (pose.translation() - previous_position_) / dt;
+      const double a = dt / (kSensorVelocityTime_s + dt);
+      sensor_velocity_ += a * (v - sensor_velocity_);
+    } else {
+      sensor_velocity_.setZero();
+    }
+    previous_position_ = pose.translation();
     previous_stamp_s_ = scan.stamp_s;
     have_previous_ = true;
   } else {
@@ -600,7 +613,7 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
       static_cast<double>(std::max(obs.point_count, track.point_count)) /
       static_cast<double>(std::max(1, std::min(obs.point_count, track.point_count)));
   MotionEvidence evidence = MotionEvidence::kFast;
-  if (obs.explained_share >= kExplainedShare) {
+  if (obs.explained_share >= kExplainedShare && !slides_unlike_the_sensor(track, obs)) {
     evidence = MotionEvidence::kSlow;  // A surface that has stood there: its outline slides.
   } else if (track.speed_mps <= cc.speed_limit_mps) {
     evidence = MotionEvidence::kSlow;
@@ -899,6 +912,20 @@ double DynamicFilter::moved_since_marked(const Track& track, const Observation& 
     if (std::abs(first - last) <= kEdgesAgree_m) lengthwise = 0.5 * (first + last);
   }
   return std::hypot(across, lengthwise);
+}
+
+// Whether an object the map explains moves along itself unlike a static surface's outline, which
+// slides only with the sensor (registration.slide_tolerance_mps): both ends its true outline (so
+// the centroid is too), and its velocity along itself away from the sensor's along it by more
+// than the tolerance.
+bool DynamicFilter::slides_unlike_the_sensor(const Track& track, const Observation& obs) const {
+  const double tolerance = config_.registration.slide_tolerance_mps;
+  if (tolerance <= 0.0 || obs.ambiguous || obs.extent_m < kSlideMinExtent_m ||
+      !obs.trusted[kCentroid]) {
+    return false;
+  }
+  const Eigen::Vector2d along = (obs.points[kLast] - obs.points[kFirst]).normalized();
+  return std::abs((track.kf[kCentroid].velocity() - sensor_velocity_).dot(along)) > tolerance;
 }
 
 bool DynamicFilter::beside_moving_track(const Track& self, const Eigen::Vector2d& point_m) const {

@@ -97,6 +97,8 @@ void RegistrationConfig::validate() const {
            "in [explained_min_span_s, 3600]");
   if (!(explained_max_age_s > 0.0 && explained_max_age_s <= 3600.0))
     reject("registration.explained_max_age_s", explained_max_age_s, "in (0, 3600]");
+  if (!(slide_tolerance_mps >= 0.0 && slide_tolerance_mps <= 100.0))
+    reject("registration.slide_tolerance_mps", slide_tolerance_mps, "0 (off) or in (0, 100]");
   if (!(range_noise_m > 0.0 && range_noise_m <= 1.0))
     reject("registration.range_noise_m", range_noise_m, "in (0, 1]");
   if (!(odometry_noise_m > 0.0)) reject("registration.odometry_noise_m", odometry_noise_m, "> 0");

@@ -517,6 +517,16 @@ TEST(ScanRegistration, BadConfigurationsNameTheField) {
   c = RegistrationConfig{};
   c.fallback_turn_decay_s = std::numeric_limits<double>::infinity();
   EXPECT_THROW(ScanRegistration{c}, std::invalid_argument);
+  c = RegistrationConfig{};
+  for (const double bad : {-0.5, std::numeric_limits<double>::quiet_NaN()}) {
+    c.slide_tolerance_mps = bad;
+    try {
+      ScanRegistration r{c};
+      ADD_FAILURE() << bad;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("registration.slide_tolerance_mps"), std::string::npos);
+    }
+  }
 }
 
 }  // namespace

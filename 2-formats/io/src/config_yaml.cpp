@@ -217,6 +217,7 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   b.number("registration.explained_min_span_in_free_s", g.explained_min_span_in_free_s);
   b.number("registration.explained_distance_m", g.explained_distance_m);
   b.number("registration.explained_max_age_s", g.explained_max_age_s);
+  b.number("registration.slide_tolerance_mps", g.slide_tolerance_mps);
   b.boolean("registration.deskew", g.deskew);
   b.number("registration.lateral_noise_mps", g.lateral_noise_mps);
   b.number("registration.fallback_turn_decay_s", g.fallback_turn_decay_s);

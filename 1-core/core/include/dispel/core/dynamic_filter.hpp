@@ -271,6 +271,7 @@ class DynamicFilter {
   void explain(const LaserScan& scan, const Segmentation& segmentation);
   static double moved_since_marked(const Track& track, const Observation& obs);
   bool beside_moving_track(const Track& self, const Eigen::Vector2d& point_m) const;
+  bool slides_unlike_the_sensor(const Track& track, const Observation& obs) const;
   void recur(const LaserScan& scan, const Segmentation& segmentation, const Pose2& sensor_pose,
              bool learn);
   void match(double stamp_s);
@@ -345,6 +346,8 @@ class DynamicFilter {
   std::uint64_t next_id_ = 1;
   bool have_previous_ = false;
   double previous_stamp_s_ = 0.0;
+  Eigen::Vector2d previous_position_ = Eigen::Vector2d::Zero();
+  Eigen::Vector2d sensor_velocity_ = Eigen::Vector2d::Zero();
 
   // Per scan, reused between scans: one entry per object of the segmentation.
   std::vector<Observation> observations_;

@@ -73,6 +73,15 @@ struct RegistrationConfig {
   double explained_distance_m = 0.12;
   /// Structure explains only while seen: hit within this long before the scan.
   double explained_max_age_s = 0.5;
+  /// An object the map explains gives no motion evidence: a static surface whose outline slides
+  /// as the sensor moves. Unless its outline is its own at both ends and moves along itself unlike
+  /// the sensor: a static surface's outline slides along it only as the sensor moves along it (an
+  /// end where the incidence grows too steep, or the surface's returns thin out, moves with the
+  /// sensor). An explained object of at least 0.5 m whose ends are both trusted and whose velocity
+  /// along itself differs from the sensor's along it by more than this (m/s) gives motion
+  /// evidence as any object does: a cart driving to and fro along one line, explained by its own
+  /// earlier passes. 0: off (the map's explanation always wins).
+  double slide_tolerance_mps = 0.5;
   /// Beams are de-skewed by their time_increment with the odometry's motion since the previous
   /// scan (never by a constant-velocity guess: its error fed back into the registration).
   bool deskew = true;

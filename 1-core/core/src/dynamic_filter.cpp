@@ -113,6 +113,13 @@ float share_at(float share, std::uint32_t since, std::uint32_t now, float keep) 
 // Fragments are absorbed by dynamic tracks seen in this scan or missed for a few scans at most.
 constexpr std::int32_t kFragmentMaxMissed = 2;
 
+// A dynamic track seen in this scan or missed for kFragmentMaxMissed scans at most: what moves
+// now, for the fragments beside it, the companions and the registration's left-out points.
+template <typename Track>
+bool moving_now(const Track& t) {
+  return t.cls.object_class == ObjectClass::kDynamic && t.missed_scans <= kFragmentMaxMissed;
+}
+
 }  // namespace
 
 const char* filter_event_name(FilterEvent event) {
@@ -178,9 +185,8 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   // Asked per sample point: only when there is such a track (most scans of a recording without
   // people have none).
   const double stamp = scan.stamp_s;
-  const bool any_moving = std::any_of(tracks_.begin(), tracks_.end(), [](const Track& t) {
-    return t.cls.object_class == ObjectClass::kDynamic && t.missed_scans <= kFragmentMaxMissed;
-  });
+  const bool any_moving =
+      std::any_of(tracks_.begin(), tracks_.end(), [](const Track& t) { return moving_now(t); });
   std::function<bool(const Eigen::Vector2d&)> moving;
   if (any_moving) {
     moving = [this, stamp](const Eigen::Vector2d& p) { return near_dynamic_track(p, stamp); };
@@ -932,10 +938,7 @@ bool DynamicFilter::beside_moving_track(const Track& self, const Eigen::Vector2d
   const double limit = config_.tracking.companion_distance_m;
   if (!(limit > 0.0)) return false;
   for (const Track& t : tracks_) {
-    if (&t == &self || t.cls.object_class != ObjectClass::kDynamic || t.free_space_pending ||
-        t.missed_scans > kFragmentMaxMissed) {
-      continue;
-    }
+    if (&t == &self || !moving_now(t) || t.free_space_pending) continue;
     if ((t.kf[kCentroid].position() - point_m).norm() <= limit) return true;
   }
   return false;
@@ -960,9 +963,7 @@ struct PredictedOutline {
 bool DynamicFilter::near_dynamic_track(const Eigen::Vector2d& point_m, double stamp_s) const {
   const double limit = config_.tracking.fragment_distance_m;
   for (const Track& t : tracks_) {
-    if (t.cls.object_class != ObjectClass::kDynamic || t.missed_scans > kFragmentMaxMissed) {
-      continue;
-    }
+    if (!moving_now(t)) continue;
     const PredictedOutline outline(t.kf[kFirst], t.kf[kLast], stamp_s - t.last_seen_s);
     if (outline.distance(point_m) <= limit) return true;
   }
@@ -1020,10 +1021,7 @@ void DynamicFilter::follow_fragments(const LaserScan& scan, const Segmentation& 
   if (!config_.tracking.follow_fragments || !(limit > 0.0) || !config_.free_space.enabled) return;
   const std::vector<std::int32_t>& labels = segmentation.beam_labels;
   for (Track& t : tracks_) {
-    if (t.cls.object_class != ObjectClass::kDynamic || t.object_index >= 0 ||
-        t.missed_scans > kFragmentMaxMissed) {
-      continue;
-    }
+    if (!moving_now(t) || t.object_index >= 0) continue;
     const double dt = scan.stamp_s - t.last_seen_s;
     if (!(dt > 0.0)) continue;
     const PredictedOutline outline(t.kf[kFirst], t.kf[kLast], dt);

@@ -1,6 +1,9 @@
 #include "dispel/io/mrpt_rawlog.hpp"
 
 #include <mrpt/io/CMemoryStream.h>
+#include <mrpt/math/CMatrixB.h>
+#include <mrpt/math/CMatrixD.h>
+#include <mrpt/math/CMatrixF.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CActionRobotMovement2D.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
@@ -11,6 +14,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -200,37 +204,33 @@ std::string container_count_error(const std::string& bytes, std::size_t pos) {
          std::to_string(left) + " bytes left";
 }
 
-// A stored object of class @p name whose name is at @p at: where it starts (the header byte
-// before the name, 0x80 | the stored name's length; the name alone or after @p space,
-// "mrpt::math::") and where its version byte is. MRPT takes the stored name as a C string, up to
-// its first NUL, so a stored name longer than the class's is the class when a NUL follows it (the
-// fuzzer: a CMatrixD stored under a 40-byte name, its rows and columns 32 bytes later than under
-// an 8-byte one). {npos, npos} when the bytes there are not such a header.
-struct StoredObject {
-  std::size_t start = std::string::npos;
-  std::size_t version_at = std::string::npos;
-};
-StoredObject stored_object(const std::string& bytes, std::size_t at, const std::string& name,
-                           const std::string& space) {
-  const auto header = [&](std::size_t start, std::size_t name_length) -> StoredObject {
+// The stored objects whose stored name contains @p key at @p at and names a class @p accept takes
+// (a TRuntimeClassId), as MRPT resolves it: calls @p f(start, version_at, id) for each, start the
+// header byte (0x80 | the stored name's length) and version_at the byte after the whole stored
+// name. MRPT takes the stored name as a C string, up to its first NUL, and looks it up in its class
+// registry: the full name ("mrpt::math::CMatrixD"), else the name after its last "::" (older
+// logs), which includes the names registered for old classes ("CMatrix", MRPT 1's CMatrixF). So
+// every header byte up to 127 bytes before @p at is a candidate, and MRPT's own lookup
+// (findRegisteredClass) says which class it makes. The fuzzer found each way round a check that
+// spelt the names out: a 40-byte name, "CMatrixD" and a NUL; "CMatrix" and a NUL; 77 bytes of
+// name ending "mrpt::math::CMatrix".
+template <typename Accept, typename F>
+void each_stored_object(const std::string& bytes, std::size_t at, const std::string& key,
+                        const Accept& accept, const F& f) {
+  const std::size_t first = at >= 127 ? at - 127 : 0;
+  for (std::size_t start = at; start-- > first;) {
     const auto head = static_cast<unsigned char>(bytes[start]);
     const std::size_t stored = head & 0x7FU;
-    const std::size_t after_name = start + 1 + name_length;
-    if ((head & 0x80U) == 0 || stored < name_length || start + 1 + stored >= bytes.size() ||
-        (stored > name_length && bytes[after_name] != '\0')) {
-      return {};
+    const std::size_t version_at = start + 1 + stored;
+    if ((head & 0x80U) == 0 || version_at < at + key.size() || version_at >= bytes.size()) {
+      continue;
     }
-    return {start, start + 1 + stored};
-  };
-  if (at >= 1) {
-    const StoredObject o = header(at - 1, name.size());
-    if (o.start != std::string::npos) return o;
+    std::string name = bytes.substr(start + 1, stored);
+    name.erase(std::min(name.find('\0'), name.size()));
+    if (name.size() < at + key.size() - (start + 1)) continue;  // A NUL before the key's end.
+    const mrpt::rtti::TRuntimeClassId* id = mrpt::rtti::findRegisteredClass(name);
+    if (id != nullptr && accept(id)) f(start, version_at, id);
   }
-  const std::string full = space + name;
-  if (at >= space.size() + 1 && bytes.compare(at - space.size(), full.size(), full) == 0) {
-    return header(at - space.size() - 1, full.size());
-  }
-  return {};
 }
 
 // MRPT makes a matrix object's storage (rows x cols, with its aligned allocator) before it reads
@@ -244,35 +244,41 @@ StoredObject stored_object(const std::string& bytes, std::size_t at, const std::
 // be a coincidence of 2^-72 per byte.) The check's message, or empty.
 std::string oversized_matrix_error(const std::string& bytes) {
   struct Kind {
+    const mrpt::rtti::TRuntimeClassId* id;
     const char* name;
     std::size_t value_bytes;
     std::size_t before_rows;  // Bytes between the version byte and the rows.
   };
-  // The names MRPT 2 registers for its matrix classes (libs/math's registerAllClasses): "CMatrix"
-  // is MRPT 1's name of CMatrixF, which MRPT 2 still reads as one (the fuzzer: a stored name
-  // "CMatrix" and a NUL, a top-level object). A CMatrixB of 4294963200 x 1024 bools was the same
-  // SIGSEGV (reading its class after that finding).
-  for (const Kind kind : {Kind{"CMatrixD", 8, 0}, Kind{"CMatrixF", 4, 0}, Kind{"CMatrix", 4, 0},
-                          Kind{"CMatrixB", 1, 4}}) {
-    const std::string name = kind.name;
-    for (std::size_t at = bytes.find(name); at != std::string::npos;
-         at = bytes.find(name, at + 1)) {
-      const auto [start, version_at] = stored_object(bytes, at, name, "mrpt::math::");
-      const std::size_t rows_at = version_at + 1 + kind.before_rows;
-      if (start == std::string::npos || rows_at + 8 > bytes.size() || bytes[version_at] != 0) {
-        continue;
-      }
-      const std::uint64_t rows = u32_at(bytes, rows_at);
-      const std::uint64_t cols = u32_at(bytes, rows_at + 4);
-      const std::uint64_t left = bytes.size() - (rows_at + 8);
-      // rows * cols * value_bytes may not fit in 64 bits (2^32 * 2^32 * 8): divided instead.
-      if (rows == 0 || cols <= left / kind.value_bytes / rows) continue;
-      return "a " + name + " of " + std::to_string(rows) + " x " + std::to_string(cols) +
-             " values at byte " + std::to_string(start) + ", more than the " +
-             std::to_string(left) + " bytes after it";
-    }
+  // MRPT 2's matrix classes (libs/math's registerAllClasses); each of their names contains
+  // "CMatrix". A CMatrixB stores the size of a bool before its rows (4294963200 x 1024 bools was
+  // the same SIGSEGV).
+  const std::array<Kind, 3> kinds = {Kind{CLASS_ID(mrpt::math::CMatrixD), "CMatrixD", 8, 0},
+                                     Kind{CLASS_ID(mrpt::math::CMatrixF), "CMatrixF", 4, 0},
+                                     Kind{CLASS_ID(mrpt::math::CMatrixB), "CMatrixB", 1, 4}};
+  const std::string key = "CMatrix";
+  std::string error;
+  for (std::size_t at = bytes.find(key); at != std::string::npos && error.empty();
+       at = bytes.find(key, at + 1)) {
+    const auto kind_of = [&](const mrpt::rtti::TRuntimeClassId* id) {
+      return std::find_if(kinds.begin(), kinds.end(), [&](const Kind& k) { return k.id == id; });
+    };
+    each_stored_object(
+        bytes, at, key, [&](const auto* id) { return kind_of(id) != kinds.end(); },
+        [&](std::size_t start, std::size_t version_at, const mrpt::rtti::TRuntimeClassId* id) {
+          const Kind& kind = *kind_of(id);
+          const std::size_t rows_at = version_at + 1 + kind.before_rows;
+          if (!error.empty() || rows_at + 8 > bytes.size() || bytes[version_at] != 0) return;
+          const std::uint64_t rows = u32_at(bytes, rows_at);
+          const std::uint64_t cols = u32_at(bytes, rows_at + 4);
+          const std::uint64_t left = bytes.size() - (rows_at + 8);
+          // rows * cols * value_bytes may not fit in 64 bits (2^32 * 2^32 * 8): divided instead.
+          if (rows == 0 || cols <= left / kind.value_bytes / rows) return;
+          error = std::string("a ") + kind.name + " of " + std::to_string(rows) + " x " +
+                  std::to_string(cols) + " values at byte " + std::to_string(start) +
+                  ", more than the " + std::to_string(left) + " bytes after it";
+        });
   }
-  return {};
+  return error;
 }
 
 // Whether MRPT reads a stored object of class @p name as a @p base: the class is registered, is
@@ -299,35 +305,43 @@ bool makes_a(const std::string& name, const mrpt::rtti::TRuntimeClassId* base) {
 // The check's message, or empty.
 constexpr std::uint32_t kMaxParticles = 100000;
 std::string movement_error(const std::string& bytes) {
-  const std::string name = "CActionRobotMovement2D";
-  for (std::size_t at = bytes.find(name); at != std::string::npos; at = bytes.find(name, at + 1)) {
-    const auto [start, version_at] = stored_object(bytes, at, name, "mrpt::obs::");
-    if (start == std::string::npos || version_at + 5 > bytes.size()) continue;
+  const std::string key = "CActionRobotMovement2D";
+  const auto* movement = CLASS_ID(mrpt::obs::CActionRobotMovement2D);
+  std::string error;
+  const auto check = [&](std::size_t start, std::size_t version_at) -> std::string {
+    if (version_at + 5 > bytes.size()) return {};
     const auto version = static_cast<unsigned char>(bytes[version_at]);
-    if (version < 4 || version > 7) continue;
+    if (version < 4 || version > 7) return {};
     const std::uint32_t method = u32_at(bytes, version_at + 1);
     const auto [inner, inner_version_at] = object_header(bytes, version_at + 5);
-    if (inner.empty()) continue;  // MRPT refuses what follows.
+    if (inner.empty()) return {};  // MRPT refuses what follows.
     if (method != 0) {
-      if (makes_a(inner, CLASS_ID(mrpt::poses::CPosePDF))) continue;
+      if (makes_a(inner, CLASS_ID(mrpt::poses::CPosePDF))) return {};
       return "a CActionRobotMovement2D at byte " + std::to_string(start) +
              " of estimation method " + std::to_string(method) + " whose pose change is " +
              quote(inner.c_str()) + ", not a CPosePDF MRPT can make";  // The file's bytes.
     }
     // Odometry: a CPose2D of version 1 (3 doubles, the end byte), then the model (4 bytes), 6
     // floats, the number of particles.
-    if (inner != "CPose2D" || bytes[inner_version_at] != 1) continue;
+    if (inner != "CPose2D" || bytes[inner_version_at] != 1) return {};
     const std::size_t model_at = inner_version_at + 1 + 24 + 1;
-    if (model_at + 4 + 24 + 4 > bytes.size()) continue;
+    if (model_at + 4 + 24 + 4 > bytes.size()) return {};
     const std::uint32_t model = u32_at(bytes, model_at);
     const std::uint32_t particles = u32_at(bytes, model_at + 4 + 24);
-    if (model == 1 && particles > kMaxParticles) {
-      return "a CActionRobotMovement2D at byte " + std::to_string(start) + " asking for " +
-             std::to_string(particles) + " particles of Thrun's motion model (more than " +
-             std::to_string(kMaxParticles) + ")";
-    }
+    if (model != 1 || particles <= kMaxParticles) return {};
+    return "a CActionRobotMovement2D at byte " + std::to_string(start) + " asking for " +
+           std::to_string(particles) + " particles of Thrun's motion model (more than " +
+           std::to_string(kMaxParticles) + ")";
+  };
+  for (std::size_t at = bytes.find(key); at != std::string::npos && error.empty();
+       at = bytes.find(key, at + 1)) {
+    each_stored_object(
+        bytes, at, key, [&](const auto* id) { return id == movement; },
+        [&](std::size_t start, std::size_t version_at, const auto* /*id*/) {
+          if (error.empty()) error = check(start, version_at);
+        });
   }
-  return {};
+  return error;
 }
 
 // The log's bytes as MRPT reads them, except that a read the bytes left cannot fill reads

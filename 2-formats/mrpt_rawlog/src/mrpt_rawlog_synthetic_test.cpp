@@ -316,8 +316,10 @@ TEST(MrptRawlogSynthetic, AWholeCRawlogIsReadAsTheLogsOwnEntries) {
 // MRPT makes a matrix's storage before it reads its values and writes through the null pointer it
 // gets when the allocation fails (SIGSEGV). Each matrix class MRPT 2 reads, written by MRPT as a
 // top-level object, its size then stated as 4294963200 x 1024: refused before MRPT reads it,
-// under MRPT 2's name and under the names MRPT reads as the same class (MRPT 1's "CMatrix" for a
-// CMatrixF, NUL-padded as the fuzzer stored it).
+// under MRPT 2's name and under every stored name MRPT reads as the same class (it takes the name
+// up to its first NUL and, when that is not a registered full name, the part after its last
+// "::"): the short name, MRPT 1's "CMatrix" for a CMatrixF, and any bytes ending in "::" before
+// either, each NUL-padded to the 20 bytes of the name MRPT wrote, as the fuzzer stored them.
 TEST(MrptRawlogSynthetic, MatricesOfEveryClassMrptReadsAreCheckedBeforeItReadsThem) {
   const auto written = [](const std::string& file, const auto& matrix) {
     const std::string path = temp_path(file);
@@ -329,34 +331,45 @@ TEST(MrptRawlogSynthetic, MatricesOfEveryClassMrptReadsAreCheckedBeforeItReadsTh
   };
   struct Case {
     std::string bytes;
-    std::string name;        // As MRPT 2 stores it.
-    std::size_t rows_after;  // Bytes between the version and the rows.
+    std::string name;               // As MRPT 2 stores it.
+    std::size_t rows_after;         // Bytes between the version and the rows.
+    std::vector<std::string> also;  // Other stored names of the class (up to 20 bytes).
   };
-  const std::vector<Case> cases = {
-      {written("d.rawlog", mrpt::math::CMatrixD(2, 3)), "mrpt::math::CMatrixD", 0},
-      {written("f.rawlog", mrpt::math::CMatrixF(2, 3)), "mrpt::math::CMatrixF", 0},
-      {written("b.rawlog", mrpt::math::CMatrixB(2, 3)), "mrpt::math::CMatrixB", 4}};
+  const std::vector<Case> cases = {{written("d.rawlog", mrpt::math::CMatrixD(2, 3)),
+                                    "mrpt::math::CMatrixD",
+                                    0,
+                                    {"CMatrixD", "x\xff::y::CMatrixD"}},
+                                   {written("f.rawlog", mrpt::math::CMatrixF(2, 3)),
+                                    "mrpt::math::CMatrixF",
+                                    0,
+                                    {"CMatrix", "\x01\x02::CMatrix", "mrpt::math::CMatrix"}},
+                                   {written("b.rawlog", mrpt::math::CMatrixB(2, 3)),
+                                    "mrpt::math::CMatrixB",
+                                    4,
+                                    {"q::CMatrixB"}}};
   for (const Case& c : cases) {
     const std::string header = std::string(1, static_cast<char>(0x80 | c.name.size())) + c.name;
     ASSERT_EQ(c.bytes.substr(0, header.size()), header);
     const std::size_t rows_at = header.size() + 1 + c.rows_after;
     ASSERT_EQ(c.bytes.substr(rows_at, 8), std::string("\x02\x00\x00\x00\x03\x00\x00\x00", 8));
-    EXPECT_EQ(open_error(test::write_text("fine_" + c.name.substr(12) + ".rawlog", c.bytes)),
-              "read")
-        << c.name;
-    std::vector<std::pair<std::string, std::string>> named = {{c.name.substr(12), c.bytes}};
-    if (c.name == "mrpt::math::CMatrixF") {
-      std::string old_name = c.bytes;
-      old_name.replace(1, c.name.size(), std::string("CMatrix") + std::string(13, '\0'));
-      named.emplace_back("CMatrix", old_name);
+    const std::string shown = c.name.substr(12);
+    EXPECT_EQ(open_error(test::write_text("fine_" + shown + ".rawlog", c.bytes)), "read");
+    std::vector<std::string> named = {c.bytes};
+    for (const std::string& name : c.also) {
+      ASSERT_LE(name.size(), c.name.size());
+      named.push_back(c.bytes);
+      named.back().replace(1, c.name.size(), name + std::string(c.name.size() - name.size(), '\0'));
     }
-    for (auto& [shown, bytes] : named) {
+    for (std::size_t k = 0; k < named.size(); ++k) {
+      std::string& bytes = named[k];
       bytes.replace(rows_at, 8, std::string("\x00\xf0\xff\xff\x00\x04\x00\x00", 8));
-      const std::string path = test::write_text("huge_" + shown + ".rawlog", bytes);
+      const std::string path =
+          test::write_text("huge_" + shown + "_" + std::to_string(k) + ".rawlog", bytes);
       EXPECT_EQ(open_error(path), path + ": not a readable MRPT rawlog (a " + shown +
                                       " of 4294963200 x 1024 values at byte 0, more than the " +
                                       std::to_string(bytes.size() - rows_at - 8) +
-                                      " bytes after it)");
+                                      " bytes after it)")
+          << (k == 0 ? c.name : c.also[k - 1]);
     }
   }
 }

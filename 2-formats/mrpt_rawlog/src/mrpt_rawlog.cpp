@@ -46,15 +46,19 @@ bool stored_flag(const bool& flag) {
 
 bool has_stamp(const mrpt::Clock::time_point& t) { return t != mrpt::Clock::time_point(); }
 
+// Seconds and ticks are split before the epochs' difference (a whole number of seconds) is taken
+// off: a stored time of -2^63 ticks minus the difference overflowed (UBSan, a fuzzer input of CI's
+// 30 s run).
+static_assert(kUnixEpochTicks % kTicksPerSecond == 0, "the epochs differ by whole seconds");
 Stamp to_stamp(const mrpt::Clock::time_point& t) {
-  const std::int64_t ticks = t.time_since_epoch().count() - kUnixEpochTicks;
+  const std::int64_t ticks = t.time_since_epoch().count();
   std::int64_t sec = ticks / kTicksPerSecond;
   std::int64_t rest = ticks % kTicksPerSecond;
   if (rest < 0) {
     rest += kTicksPerSecond;
     --sec;
   }
-  return {sec, static_cast<std::uint32_t>(rest * 100)};
+  return {sec - kUnixEpochTicks / kTicksPerSecond, static_cast<std::uint32_t>(rest * 100)};
 }
 
 // The innermost "Message:" line of an MRPT exception (its text is several lines, with a call

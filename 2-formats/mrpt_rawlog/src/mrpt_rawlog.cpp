@@ -208,32 +208,34 @@ std::string container_count_error(const std::string& bytes, std::size_t pos) {
          std::to_string(left) + " bytes left";
 }
 
-// The stored objects whose stored name contains @p key at @p at and names a class @p accept takes
-// (a TRuntimeClassId), as MRPT resolves it: calls @p f(start, version_at, id) for each, start the
-// header byte (0x80 | the stored name's length) and version_at the byte after the whole stored
-// name. MRPT takes the stored name as a C string, up to its first NUL, and looks it up in its class
-// registry: the full name ("mrpt::math::CMatrixD"), else the name after its last "::" (older
-// logs), which includes the names registered for old classes ("CMatrix", MRPT 1's CMatrixF). So
-// every header byte up to 127 bytes before @p at is a candidate, and MRPT's own lookup
-// (findRegisteredClass) says which class it makes. The fuzzer found each way round a check that
-// spelt the names out: a 40-byte name, "CMatrixD" and a NUL; "CMatrix" and a NUL; 77 bytes of
-// name ending "mrpt::math::CMatrix".
+// The stored objects, anywhere in the log's bytes, whose stored name contains @p key and names a
+// class @p accept takes (a TRuntimeClassId), as MRPT resolves it: calls @p f(start, version_at,
+// id) for each until it returns true, start the header byte (0x80 | the stored name's length) and
+// version_at the byte after the whole stored name. MRPT takes the stored name as a C string, up to
+// its first NUL, and looks it up in its class registry: the full name ("mrpt::math::CMatrixD"),
+// else the name after its last "::" (older logs), which includes the names registered for old
+// classes ("CMatrix", MRPT 1's CMatrixF). So every header byte up to 127 bytes before an occurrence
+// of @p key is a candidate, and MRPT's own lookup (findRegisteredClass) says which class it makes.
+// The fuzzer found each way round a check that spelt the names out: a 40-byte name, "CMatrixD" and
+// a NUL; "CMatrix" and a NUL; 77 bytes of name ending "mrpt::math::CMatrix".
 template <typename Accept, typename F>
-void each_stored_object(const std::string& bytes, std::size_t at, const std::string& key,
-                        const Accept& accept, const F& f) {
-  const std::size_t first = at >= 127 ? at - 127 : 0;
-  for (std::size_t start = at; start-- > first;) {
-    const auto head = static_cast<unsigned char>(bytes[start]);
-    const std::size_t stored = head & 0x7FU;
-    const std::size_t version_at = start + 1 + stored;
-    if ((head & 0x80U) == 0 || version_at < at + key.size() || version_at >= bytes.size()) {
-      continue;
+void each_stored_object(const std::string& bytes, const std::string& key, const Accept& accept,
+                        const F& f) {
+  for (std::size_t at = bytes.find(key); at != std::string::npos; at = bytes.find(key, at + 1)) {
+    const std::size_t first = at >= 127 ? at - 127 : 0;
+    for (std::size_t start = at; start-- > first;) {
+      const auto head = static_cast<unsigned char>(bytes[start]);
+      const std::size_t stored = head & 0x7FU;
+      const std::size_t version_at = start + 1 + stored;
+      if ((head & 0x80U) == 0 || version_at < at + key.size() || version_at >= bytes.size()) {
+        continue;
+      }
+      std::string name = bytes.substr(start + 1, stored);
+      name.erase(std::min(name.find('\0'), name.size()));
+      if (name.size() < at + key.size() - (start + 1)) continue;  // A NUL before the key's end.
+      const mrpt::rtti::TRuntimeClassId* id = mrpt::rtti::findRegisteredClass(name);
+      if (id != nullptr && accept(id) && f(start, version_at, id)) return;
     }
-    std::string name = bytes.substr(start + 1, stored);
-    name.erase(std::min(name.find('\0'), name.size()));
-    if (name.size() < at + key.size() - (start + 1)) continue;  // A NUL before the key's end.
-    const mrpt::rtti::TRuntimeClassId* id = mrpt::rtti::findRegisteredClass(name);
-    if (id != nullptr && accept(id)) f(start, version_at, id);
   }
 }
 
@@ -243,9 +245,9 @@ void each_stored_object(const std::string& bytes, std::size_t at, const std::str
 // mount pose of a scan, from the fuzzer). Every stored CMatrixD, CMatrixF and CMatrixB object
 // (version 0: rows, cols, the values; CMatrixB stores the size of a bool before them) is found in
 // the log's bytes, at any depth, and one with more values than the bytes after it refuses the log
-// before MRPT reads any of it. (The 9 or more bytes of a
-// matrix's header are not checked for where they stand; inside another field's bytes they would
-// be a coincidence of 2^-72 per byte.) The check's message, or empty.
+// before MRPT reads any of it. (The 9 or more bytes of a matrix's header are not checked for where
+// they stand; inside another field's bytes they would be a coincidence of 2^-72 per byte.) The
+// check's message, or empty.
 std::string oversized_matrix_error(const std::string& bytes) {
   struct Kind {
     const mrpt::rtti::TRuntimeClassId* id;
@@ -259,29 +261,26 @@ std::string oversized_matrix_error(const std::string& bytes) {
   const std::array<Kind, 3> kinds = {Kind{CLASS_ID(mrpt::math::CMatrixD), "CMatrixD", 8, 0},
                                      Kind{CLASS_ID(mrpt::math::CMatrixF), "CMatrixF", 4, 0},
                                      Kind{CLASS_ID(mrpt::math::CMatrixB), "CMatrixB", 1, 4}};
-  const std::string key = "CMatrix";
+  const auto kind_of = [&](const mrpt::rtti::TRuntimeClassId* id) {
+    return std::find_if(kinds.begin(), kinds.end(), [&](const Kind& k) { return k.id == id; });
+  };
   std::string error;
-  for (std::size_t at = bytes.find(key); at != std::string::npos && error.empty();
-       at = bytes.find(key, at + 1)) {
-    const auto kind_of = [&](const mrpt::rtti::TRuntimeClassId* id) {
-      return std::find_if(kinds.begin(), kinds.end(), [&](const Kind& k) { return k.id == id; });
-    };
-    each_stored_object(
-        bytes, at, key, [&](const auto* id) { return kind_of(id) != kinds.end(); },
-        [&](std::size_t start, std::size_t version_at, const mrpt::rtti::TRuntimeClassId* id) {
-          const Kind& kind = *kind_of(id);
-          const std::size_t rows_at = version_at + 1 + kind.before_rows;
-          if (!error.empty() || rows_at + 8 > bytes.size() || bytes[version_at] != 0) return;
-          const std::uint64_t rows = u32_at(bytes, rows_at);
-          const std::uint64_t cols = u32_at(bytes, rows_at + 4);
-          const std::uint64_t left = bytes.size() - (rows_at + 8);
-          // rows * cols * value_bytes may not fit in 64 bits (2^32 * 2^32 * 8): divided instead.
-          if (rows == 0 || cols <= left / kind.value_bytes / rows) return;
-          error = std::string("a ") + kind.name + " of " + std::to_string(rows) + " x " +
-                  std::to_string(cols) + " values at byte " + std::to_string(start) +
-                  ", more than the " + std::to_string(left) + " bytes after it";
-        });
-  }
+  each_stored_object(
+      bytes, "CMatrix", [&](const auto* id) { return kind_of(id) != kinds.end(); },
+      [&](std::size_t start, std::size_t version_at, const mrpt::rtti::TRuntimeClassId* id) {
+        const Kind& kind = *kind_of(id);
+        const std::size_t rows_at = version_at + 1 + kind.before_rows;
+        if (rows_at + 8 > bytes.size() || bytes[version_at] != 0) return false;
+        const std::uint64_t rows = u32_at(bytes, rows_at);
+        const std::uint64_t cols = u32_at(bytes, rows_at + 4);
+        const std::uint64_t left = bytes.size() - (rows_at + 8);
+        // rows * cols * value_bytes may not fit in 64 bits (2^32 * 2^32 * 8): divided instead.
+        if (rows == 0 || cols <= left / kind.value_bytes / rows) return false;
+        error = std::string("a ") + kind.name + " of " + std::to_string(rows) + " x " +
+                std::to_string(cols) + " values at byte " + std::to_string(start) +
+                ", more than the " + std::to_string(left) + " bytes after it";
+        return true;
+      });
   return error;
 }
 
@@ -309,7 +308,6 @@ bool makes_a(const std::string& name, const mrpt::rtti::TRuntimeClassId* base) {
 // The check's message, or empty.
 constexpr std::uint32_t kMaxParticles = 100000;
 std::string movement_error(const std::string& bytes) {
-  const std::string key = "CActionRobotMovement2D";
   const auto* movement = CLASS_ID(mrpt::obs::CActionRobotMovement2D);
   std::string error;
   const auto check = [&](std::size_t start, std::size_t version_at) -> std::string {
@@ -337,14 +335,12 @@ std::string movement_error(const std::string& bytes) {
            std::to_string(particles) + " particles of Thrun's motion model (more than " +
            std::to_string(kMaxParticles) + ")";
   };
-  for (std::size_t at = bytes.find(key); at != std::string::npos && error.empty();
-       at = bytes.find(key, at + 1)) {
-    each_stored_object(
-        bytes, at, key, [&](const auto* id) { return id == movement; },
-        [&](std::size_t start, std::size_t version_at, const auto* /*id*/) {
-          if (error.empty()) error = check(start, version_at);
-        });
-  }
+  each_stored_object(
+      bytes, "CActionRobotMovement2D", [&](const auto* id) { return id == movement; },
+      [&](std::size_t start, std::size_t version_at, const auto* /*id*/) {
+        error = check(start, version_at);
+        return !error.empty();
+      });
   return error;
 }
 

@@ -414,12 +414,19 @@ std::int32_t Segmenter::min_points_of(const LaserScan& scan, const Object& obj) 
   if (!(covered < static_cast<double>(n_min))) return n_min;  // Also a range of 0 (inf, NaN).
   // Only a thing that stands out whole in front of what is beside it (a leg against the far
   // wall or against nothing): a piece of a wall seen at a slant, or a thing cut by the view's
-  // end or by something nearer, is no object below min_points.
-  const auto stands_out = [](EdgeNeighbour e) {
-    return e == EdgeNeighbour::kFarther || e == EdgeNeighbour::kInvalid;
+  // end or by something nearer, is no object below min_points. Nor is one beside a beam that
+  // measured nothing usable (NaN, or below range_min: a scanner's error code), which says
+  // nothing of what is there: negative_2's lasers read 0 on a fifth of their beams, scattered
+  // over walls at 3-7 m, whose pieces between such beams were taken for legs.
+  const auto stands_out = [&](std::int32_t beam, int step) {
+    const EdgeNeighbour e = neighbour_of(scan, beam, step);
+    if (e == EdgeNeighbour::kFarther) return true;
+    if (e != EdgeNeighbour::kInvalid) return false;
+    const auto n = static_cast<std::int32_t>(scan.size());
+    return scan.ranges_m[static_cast<std::size_t>((beam + step + n) % n)] > scan.range_max_m;
   };
-  if (!stands_out(neighbour_of(scan, clusters_[obj.first_cluster].first_beam, -1)) ||
-      !stands_out(neighbour_of(scan, clusters_[obj.last_cluster].last_beam, +1))) {
+  if (!stands_out(clusters_[obj.first_cluster].first_beam, -1) ||
+      !stands_out(clusters_[obj.last_cluster].last_beam, +1)) {
     return n_min;
   }
   return std::max<std::int32_t>(2, static_cast<std::int32_t>(std::lround(covered)));

@@ -306,6 +306,32 @@ TEST(Segmentation, APieceCutByWhatIsBesideItStaysNoiseWhateverItsWidth) {
   for (std::size_t i : {0, 1, 2, 400, 401, 402}) EXPECT_EQ(seg.beam_labels[i], kLabelNoise) << i;
 }
 
+TEST(Segmentation, APieceBesideABeamThatMeasuredNothingStaysNoiseWhateverItsWidth) {
+  // Three beams at 6 m, each piece beside a different kind of invalid beam on both sides. Only
+  // no return at all (+inf, or beyond range_max: REP 117's "nothing there") shows it standing out
+  // in front of what is beside it; an erroneous reading (NaN, below range_min: a scanner's error
+  // code, which negative_2's lasers give on a fifth of their beams) may be more of the same wall.
+  LaserScan scan = cast(World{}, scanner_768());
+  const auto piece = [&](std::size_t from, float beside) {
+    scan.ranges_m[from - 1] = beside;
+    for (std::size_t i = from; i < from + 3; ++i) scan.ranges_m[i] = 6.0F;
+    scan.ranges_m[from + 3] = beside;
+  };
+  piece(100, kInf);
+  piece(200, 41.0F);  // Beyond the scanner's range_max.
+  piece(300, kNaN);
+  piece(400, 0.0F);  // Below range_min: an error code.
+  SegmentationConfig config;
+  config.min_points = 4;
+  config.min_width_m = 0.1;
+  const Segmentation seg = Segmenter{config}.segment(scan);
+  expect_consistent(scan, seg, config);
+  EXPECT_EQ(seg.objects.size(), 2U);
+  for (std::size_t i : {100, 101, 102, 200, 201, 202}) EXPECT_GE(seg.beam_labels[i], 0) << i;
+  for (std::size_t i : {300, 301, 302, 400, 401, 402})
+    EXPECT_EQ(seg.beam_labels[i], kLabelNoise) << i;
+}
+
 TEST(Segmentation, InvalidBeamsAreNeverObjectsAndDoNotCutASurface) {
   World world;
   world.segments = {wall(3.0, -3.0, 3.0, 3.0)};

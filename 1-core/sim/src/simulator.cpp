@@ -383,6 +383,17 @@ void Scenario::validate() const {
     reject("lidar.incidence_noise", lidar.incidence_noise, "in [0, 10]");
   if (!(lidar.mixed_pixels >= 0.0 && lidar.mixed_pixels <= 1.0))
     reject("lidar.mixed_pixels", lidar.mixed_pixels, "in [0, 1]");
+  if (!(lidar.speckle >= 0.0 && lidar.speckle < 1.0))
+    reject("lidar.speckle", lidar.speckle, "in [0, 1)");
+  if (lidar.speckle > 0.0) {
+    const auto [near_m, far_m] = lidar.speckle_range_m;
+    if (!(near_m > 0.0 && near_m <= lidar.range_max_m))
+      reject("lidar.speckle_range_m[0]", near_m, "in (0, lidar.range_max_m]");
+    if (!(far_m >= near_m && far_m <= lidar.range_max_m))
+      reject("lidar.speckle_range_m[1]", far_m, "in [speckle_range_m[0], lidar.range_max_m]");
+    if (!(lidar.speckle_beams_max >= 1 && lidar.speckle_beams_max <= 64))
+      reject("lidar.speckle_beams_max", lidar.speckle_beams_max, "in [1, 64]");
+  }
   if (world.rough_walls) {
     const RoughWalls& w = *world.rough_walls;
     if (!(w.amplitude_m >= 0.0 && w.amplitude_m <= 1.0))
@@ -763,6 +774,32 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
     }
   };
 
+  // Speckle: runs of beams that reached nothing in range return one range in the band (see
+  // LidarConfig::speckle).
+  const auto add_speckle = [&](ScanFrame& frame, const std::vector<std::int32_t>& hit) {
+    if (!(lidar.speckle > 0.0)) return;
+    const auto open = [&](std::size_t i) {
+      return masked[i] == 0 && hit[i] < 0 && frame.truth[i] == Truth::kNoReturn;
+    };
+    const std::size_t n = frame.truth.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!open(i) || !(u01(rng) < lidar.speckle)) continue;
+      const auto [near_m, far_m] = lidar.speckle_range_m;
+      const double range = near_m + u01(rng) * (far_m - near_m);
+      const double sigma = lidar.range_noise_m + lidar.range_noise_per_m * range;
+      const std::size_t end = std::min(
+          n, i + 1 +
+                 static_cast<std::size_t>(u01(rng) * static_cast<double>(lidar.speckle_beams_max)));
+      std::size_t j = i;
+      for (; j < end && open(j); ++j) {
+        frame.scan.ranges_m[j] = static_cast<float>(
+            std::max(static_cast<double>(geometry.range_min_m), range + sigma * n01(rng)));
+        frame.truth[j] = Truth::kStatic;
+      }
+      i = j;  // The beam after a run returns nothing, as it did (the loop moves past it).
+    }
+  };
+
   for (std::int64_t step = 0; step <= steps; ++step) {
     const double t = scenario.start_time_s + static_cast<double>(step) * kStep;
     // Sensors and scans see the state at t; then the world moves on by one step.
@@ -851,6 +888,7 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
           frame.actor[i] = actor + 1;
         }
       }
+      add_speckle(frame, hit);
       if (sink.scan) sink.scan(std::move(frame));
     }
     if (sample_now && sink.sensor) sink.sensor(sample);

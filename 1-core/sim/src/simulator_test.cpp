@@ -671,6 +671,54 @@ TEST(Scenario, BadValuesAreRejectedByName) {
   s = Scenario{};
   s.lidar.range_noise_per_m = -1.0;
   expect_named(s, "lidar.range_noise_per_m");
+  s = Scenario{};
+  s.lidar.speckle = 0.1;
+  s.lidar.speckle_range_m = {4.0, 50.0};  // Beyond range_max_m.
+  expect_named(s, "lidar.speckle_range_m[1]");
+  s.lidar.speckle_range_m = {4.0, 5.0};
+  s.lidar.speckle_beams_max = 0;
+  expect_named(s, "lidar.speckle_beams_max");
+}
+
+// Speckle: sporadic returns in the band, in runs of at most speckle_beams_max beams, only where
+// nothing was in range (never on a beam a wall or a walker blocks nearer), labelled static. The
+// walls of a 10 m room are within range of every beam, so the room is opened: one wall only.
+TEST(Simulator, SpeckleReturnsOnlyWhereNothingIsInRangeAndIsBackground) {
+  Scenario s = room_with_walker();
+  s.world.walls = {{{-5, -5}, {5, -5}}};
+  s.lidar.range_max_m = 12.0;
+  const SimulationOutput plain = simulate(s, 3);
+  s.lidar.speckle = 0.05;
+  s.lidar.speckle_range_m = {6.0, 8.0};
+  s.lidar.speckle_beams_max = 3;
+  const SimulationOutput speckled = simulate(s, 3);
+  ASSERT_EQ(plain.scans.size(), speckled.scans.size());
+  std::int64_t speckle = 0, runs = 0, open_beams = 0;
+  for (std::size_t k = 0; k < plain.scans.size(); ++k) {
+    const ScanFrame& a = plain.scans[k];
+    const ScanFrame& b = speckled.scans[k];
+    std::size_t run = 0;
+    for (std::size_t i = 0; i < a.truth.size(); ++i) {
+      const bool open = a.truth[i] == Truth::kNoReturn;
+      open_beams += open ? 1 : 0;
+      if (a.scan.ranges_m[i] == b.scan.ranges_m[i] && a.truth[i] == b.truth[i]) {
+        run = 0;
+        continue;
+      }
+      ASSERT_TRUE(open) << "scan " << k << " beam " << i;  // Only where nothing was in range.
+      EXPECT_EQ(b.truth[i], Truth::kStatic);
+      EXPECT_EQ(b.actor[i], 0);
+      EXPECT_GE(b.scan.ranges_m[i], 5.9F);
+      EXPECT_LE(b.scan.ranges_m[i], 8.1F);
+      ++speckle;
+      runs += run == 0 ? 1 : 0;
+      EXPECT_LT(++run, 4U) << "scan " << k << " beam " << i;
+    }
+  }
+  // About 5 % of the open beams start a run of 2 beams on average.
+  EXPECT_GT(runs, open_beams / 40);
+  EXPECT_LT(runs, open_beams / 10);
+  EXPECT_GT(speckle, runs);
 }
 
 }  // namespace

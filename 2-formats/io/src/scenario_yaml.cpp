@@ -214,7 +214,7 @@ void read_lidar(const Reader& r, const YAML::Node& n, sim::LidarConfig& l) {
   r.keys(n, "lidar",
          {"range_max_m", "fov_deg", "resolution_deg", "rate_hz", "range_limit_m",
           "masked_sectors_deg", "range_noise_m", "range_noise_per_m", "incidence_noise",
-          "mixed_pixels", "dropout", "sweep"});
+          "mixed_pixels", "dropout", "sweep", "speckle", "speckle_range_m", "speckle_beams_max"});
   if (n["range_noise_per_m"])
     l.range_noise_per_m = r.number(n["range_noise_per_m"], "lidar.range_noise_per_m");
   if (n["incidence_noise"])
@@ -228,6 +228,13 @@ void read_lidar(const Reader& r, const YAML::Node& n, sim::LidarConfig& l) {
   if (n["range_limit_m"]) l.range_limit_m = r.number(n["range_limit_m"], "lidar.range_limit_m");
   if (n["range_noise_m"]) l.range_noise_m = r.number(n["range_noise_m"], "lidar.range_noise_m");
   if (n["dropout"]) l.dropout = r.number(n["dropout"], "lidar.dropout");
+  if (n["speckle"]) l.speckle = r.number(n["speckle"], "lidar.speckle");
+  if (n["speckle_range_m"]) {
+    const auto v = r.numbers(n["speckle_range_m"], "lidar.speckle_range_m", 2);
+    l.speckle_range_m = {v[0], v[1]};
+  }
+  if (n["speckle_beams_max"])
+    l.speckle_beams_max = r.integer(n["speckle_beams_max"], "lidar.speckle_beams_max");
   if (n["masked_sectors_deg"]) {
     const YAML::Node& m = n["masked_sectors_deg"];
     if (!m.IsSequence()) r.fail("lidar.masked_sectors_deg must be a list of [begin_deg, end_deg]");

@@ -84,6 +84,16 @@ TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
   expect_error("world: {clutter: {count: 5, area: [0, 0, 1, 1], return_share: 2}}",
                "world.clutter.return_share must be");
   expect_error("world: {clutter: {cuont: 5}}", "unknown key 'world.clutter.cuont'");
+  expect_error("lidar: {speckle: 0.1, speckle_range_m: [4]}",
+               "lidar.speckle_range_m must be a list of 2 numbers");
+  expect_error("lidar: {speckle: 1.5}", "lidar.speckle must be");
+  const sim::Scenario speckled = parse_scenario(
+      "lidar: {range_max_m: 5.6, speckle: 0.016, speckle_range_m: [4.0, 5.6], "
+      "speckle_beams_max: 3}",
+      "s.yaml");
+  EXPECT_EQ(speckled.lidar.speckle, 0.016);
+  EXPECT_EQ(speckled.lidar.speckle_range_m, std::make_pair(4.0, 5.6));
+  EXPECT_EQ(speckled.lidar.speckle_beams_max, 3);
   expect_error("world: {rough_walls: {low_things_radius_m: [0.2]}}",
                "world.rough_walls.low_things_radius_m must be a list of 2 numbers");
   expect_error("world: {rough_walls: {low_things_seen_within_m: [3, 2]}}",
@@ -310,6 +320,24 @@ TEST(SimPipeline, ALaserOnlyRobotFollowingAWalkerKeepsItsBackground) {
   EXPECT_GT(following.stats.counters.registration_held_sideways, 0);
   EXPECT_EQ(following.stats.counters.scans_without_odometry, following.stats.scans);
   EXPECT_LE(following.variant_rates.at(0).preservation_rate(), 0.7);
+}
+
+// What N_min by width costs outdoors. person_following_outdoor_1 (a real robot outdoors, 5.6 m
+// scanner) returns 1-4 beams at 4-5.6 m among beams with no return, in one scan and not the next:
+// about one beam in 60 of those with no return starts such a run. With segmentation.min_width_m
+// 0.1 the real recording kept 0.836 of its background (0.960 without); the simulator, until it had
+// speckle, kept everything either way. With the recording's speckle the scenario shows the loss
+// (seed 1, with the wheel odometry: measured 0.9989 kept by the default, 0.9080 with the option).
+TEST(SimPipeline, SpeckleOutdoorsIsWhatNminByWidthCannotTellFromLegs) {
+  const FilteredScenario outdoors = simulate_and_filter(
+      "person_following", {[](DynamicFilterConfig& c) { c.segmentation.min_width_m = 0.1; }}, 1,
+      [](FilterJobOptions& o) { o.scale_to_scanner = false; },
+      [](sim::Scenario& s) {
+        s.lidar.speckle = 0.016;
+        s.lidar.speckle_range_m = {4.0, 5.6};
+      });
+  EXPECT_GE(outdoors.rates.preservation_rate(), 0.99);
+  EXPECT_LE(outdoors.variant_rates.at(0).preservation_rate(), 0.95);
 }
 
 // The office driven twice round (200 s) with larger low things, which a tilted scan plane sees

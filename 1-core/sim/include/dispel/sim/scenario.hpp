@@ -120,6 +120,15 @@ struct LidarConfig {
   /// range between the near and the far surface (a mixed pixel).
   double mixed_pixels = 0.0;
   double dropout = 0.002;  ///< Probability that a beam returns nothing.
+  /// Speckle: sporadic returns where nothing is in range, as a real scanner outdoors gives them
+  /// (the ground or grass seen as the scanner pitches, a weak echo near its range limit). Each
+  /// beam that returns nothing starts one with this probability: it and up to
+  /// speckle_beams_max - 1 following beams that return nothing all return one range drawn in
+  /// [speckle_range_m.first, speckle_range_m.second] (plus the range noise), in that scan only.
+  /// Truth code static: it is background, not a moving thing. 0: none (no draws are made).
+  double speckle = 0.0;
+  std::pair<double, double> speckle_range_m{0.0, 0.0};
+  int speckle_beams_max = 4;
   /// Beams are measured over the sweep: beam i at stamp + i * time_increment, where
   /// time_increment is one revolution (1 / rate_hz) divided by the beams a full turn would have;
   /// the robot moves during the scan. false: every beam at the stamp (time_increment 0).

@@ -240,6 +240,16 @@ std::int32_t Segmenter::find_rotation_start(const LaserScan& scan, bool& seam_co
   return 0;  // Every valid beam joins its predecessor: one ring; start anywhere.
 }
 
+void Segmenter::segment(const LaserScan& scan, Segmentation& out,
+                        const std::function<bool(const Eigen::Vector2d&)>& seen_before) {
+  struct Asking {  // The question is asked during this call only, however it ends.
+    const std::function<bool(const Eigen::Vector2d&)>*& held;
+    ~Asking() { held = nullptr; }
+  } asking{seen_before_};
+  seen_before_ = seen_before ? &seen_before : nullptr;
+  segment(scan, out);
+}
+
 void Segmenter::segment(const LaserScan& scan, Segmentation& out) {
   out.issue = check_scan(scan);
   out.beam_labels.clear();
@@ -428,6 +438,10 @@ std::int32_t Segmenter::min_points_of(const LaserScan& scan, const Object& obj) 
   if (!stands_out(clusters_[obj.first_cluster].first_beam, -1) ||
       !stands_out(clusters_[obj.last_cluster].last_beam, +1)) {
     return n_min;
+  }
+  if (seen_before_ != nullptr) {
+    const double count = static_cast<double>(obj.count);
+    if (!(*seen_before_)(Eigen::Vector2d(obj.sum_x / count, obj.sum_y / count))) return n_min;
   }
   return std::max<std::int32_t>(2, static_cast<std::int32_t>(std::lround(covered)));
 }

@@ -332,6 +332,34 @@ TEST(Segmentation, APieceBesideABeamThatMeasuredNothingStaysNoiseWhateverItsWidt
     EXPECT_EQ(seg.beam_labels[i], kLabelNoise) << i;
 }
 
+TEST(Segmentation, APieceBelowNminIsAnObjectOnlyWhereSomethingWasSeenBefore) {
+  // Two legs of three beams at 6 m against nothing; the caller's scan before saw something only
+  // near the first (x > 0 in the sensor frame). Objects at min_points are not asked.
+  LaserScan scan = cast(World{}, scanner_768());
+  for (std::size_t i = 500; i < 503; ++i) scan.ranges_m[i] = 6.0F;  // Bearing about +40 degrees.
+  for (std::size_t i = 100; i < 103; ++i) scan.ranges_m[i] = 6.0F;  // About -100 degrees.
+  for (std::size_t i = 300; i < 310; ++i) scan.ranges_m[i] = 2.0F;  // A pillar, 10 beams.
+  SegmentationConfig config;
+  config.min_points = 4;
+  config.min_width_m = 0.1;
+  Segmenter segmenter{config};
+  int asked = 0;
+  Segmentation seg;
+  segmenter.segment(scan, seg, [&](const Eigen::Vector2d& centroid_m) {
+    ++asked;
+    EXPECT_NEAR(centroid_m.norm(), 6.0, 0.05);
+    return centroid_m.x() > 0.0;
+  });
+  expect_consistent(scan, seg, config);
+  EXPECT_EQ(asked, 2);
+  EXPECT_EQ(seg.objects.size(), 2U);
+  EXPECT_GE(seg.beam_labels[501], 0);
+  EXPECT_GE(seg.beam_labels[305], 0);
+  EXPECT_EQ(seg.beam_labels[101], kLabelNoise);
+  // Without the question both legs are objects.
+  EXPECT_EQ(segmenter.segment(scan).objects.size(), 3U);
+}
+
 TEST(Segmentation, InvalidBeamsAreNeverObjectsAndDoNotCutASurface) {
   World world;
   world.segments = {wall(3.0, -3.0, 3.0, 3.0)};

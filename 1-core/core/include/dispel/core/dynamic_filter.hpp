@@ -348,6 +348,18 @@ class DynamicFilter {
   double previous_stamp_s_ = 0.0;
   Eigen::Vector2d previous_position_ = Eigen::Vector2d::Zero();
   Eigen::Vector2d sensor_velocity_ = Eigen::Vector2d::Zero();
+  // For segmentation.min_width_m: the last scans' beam end points (fixed frame, NaN: invalid),
+  // poses and geometry, the latest first; whether a small thing was there in each (seen_before()).
+  struct EarlierScan {
+    std::vector<Eigen::Vector2d> points;
+    Pose2 sensor_pose;
+    double angle_min_rad = 0.0;
+    double increment_rad = 0.0;
+    bool has_return_near(const Eigen::Vector2d& point_m, double radius_m) const;
+  };
+  std::array<EarlierScan, 2> earlier_scans_;
+  std::size_t earlier_count_ = 0;  // Of earlier_scans_ held since the last reset.
+  bool seen_before(const Eigen::Vector2d& point_m) const;
 
   // Per scan, reused between scans: one entry per object of the segmentation.
   std::vector<Observation> observations_;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "dispel/core/laser_scan.hpp"
@@ -151,6 +152,11 @@ class Segmenter {
   /// Segments @p scan into @p out (reusing its storage). A scan that fails check_scan() is
   /// rejected: out.issue says why and out holds no labels or objects.
   void segment(const LaserScan& scan, Segmentation& out);
+  /// The same; with min_width_m, an object below min_points is one only where @p seen_before says
+  /// something was at its centroid (sensor frame, metres) in the scan before: a far leg is there
+  /// scan after scan, a sporadic return outdoors is not.
+  void segment(const LaserScan& scan, Segmentation& out,
+               const std::function<bool(const Eigen::Vector2d&)>& seen_before);
 
   /// Convenience overload returning a fresh result.
   Segmentation segment(const LaserScan& scan) {
@@ -173,6 +179,7 @@ class Segmenter {
 
   SegmentationConfig config_;
   double cluster_gap_sq_m2_;
+  const std::function<bool(const Eigen::Vector2d&)>* seen_before_ = nullptr;  // During segment().
 
   // Geometry cache: recomputed only when the scan's angles or size change.
   double cached_angle_min_rad_ = 0.0;

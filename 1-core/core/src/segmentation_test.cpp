@@ -284,6 +284,16 @@ TEST(Segmentation, ALegAtRangeIsAnObjectWhenNminFallsWithItsWidth) {
   EXPECT_EQ(Segmenter{config}.segment(cable).objects.size(), 1U);  // The wall alone.
 }
 
+// N_min 4, falling with range to the beams a thing 0.1 m wide covers; @p scan segmented with it.
+Segmentation segment_by_width(const LaserScan& scan) {
+  SegmentationConfig config;
+  config.min_points = 4;
+  config.min_width_m = 0.1;
+  Segmentation seg = Segmenter{config}.segment(scan);
+  expect_consistent(scan, seg, config);
+  return seg;
+}
+
 TEST(Segmentation, APieceCutByWhatIsBesideItStaysNoiseWhateverItsWidth) {
   // Three beams at 6 m against nothing; three more beside something nearer; three at the end of
   // the view. Only the first stand out whole: the others may be part of something larger.
@@ -295,11 +305,7 @@ TEST(Segmentation, APieceCutByWhatIsBesideItStaysNoiseWhateverItsWidth) {
   set(400, 402, 6.0F);
   set(403, 412, 3.0F);  // A pillar beside the second piece.
   set(0, 2, 6.0F);
-  SegmentationConfig config;
-  config.min_points = 4;
-  config.min_width_m = 0.1;
-  const Segmentation seg = Segmenter{config}.segment(scan);
-  expect_consistent(scan, seg, config);
+  const Segmentation seg = segment_by_width(scan);
   EXPECT_EQ(seg.objects.size(), 2U);
   EXPECT_GE(seg.beam_labels[301], 0);
   EXPECT_GE(seg.beam_labels[405], 0);
@@ -321,11 +327,7 @@ TEST(Segmentation, APieceBesideABeamThatMeasuredNothingStaysNoiseWhateverItsWidt
   piece(200, 41.0F);  // Beyond the scanner's range_max.
   piece(300, kNaN);
   piece(400, 0.0F);  // Below range_min: an error code.
-  SegmentationConfig config;
-  config.min_points = 4;
-  config.min_width_m = 0.1;
-  const Segmentation seg = Segmenter{config}.segment(scan);
-  expect_consistent(scan, seg, config);
+  const Segmentation seg = segment_by_width(scan);
   EXPECT_EQ(seg.objects.size(), 2U);
   for (std::size_t i : {100, 101, 102, 200, 201, 202}) EXPECT_GE(seg.beam_labels[i], 0) << i;
   for (std::size_t i : {300, 301, 302, 400, 401, 402})

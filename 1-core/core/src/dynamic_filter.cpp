@@ -257,6 +257,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
       latest.sensor_pose = pose;
       latest.angle_min_rad = scan.angle_min_rad;
       latest.increment_rad = scan.angle_increment_rad;
+      latest.full_circle = out.segmentation.full_circle;
       earlier_count_ = std::min(earlier_count_ + 1, earlier_scans_.size());
     }
   } else {
@@ -399,12 +400,11 @@ bool DynamicFilter::EarlierScan::has_return_near(const Eigen::Vector2d& point_m,
   const double increment = std::abs(increment_rad);
   if (!(range > 0.0) || !(increment > 0.0) || points.empty()) return false;
   const auto n = static_cast<std::int64_t>(points.size());
-  const bool circle = static_cast<double>(n) * increment >= 2.0 * kPi - 1.5 * increment;
   const auto centre = static_cast<std::int64_t>(
       std::lround((std::atan2(q.y(), q.x()) - angle_min_rad) / increment_rad));
   const auto reach = static_cast<std::int64_t>(std::ceil(std::atan2(radius_m, range) / increment));
   for (std::int64_t j = centre - reach; j <= centre + reach; ++j) {
-    const std::int64_t k = circle ? ((j % n) + n) % n : j;
+    const std::int64_t k = full_circle ? ((j % n) + n) % n : j;
     if (k < 0 || k >= n) continue;
     // False for an invalid beam's NaN.
     if ((points[static_cast<std::size_t>(k)] - point_m).squaredNorm() <= radius_m * radius_m) {

@@ -240,17 +240,9 @@ std::int32_t Segmenter::find_rotation_start(const LaserScan& scan, bool& seam_co
   return 0;  // Every valid beam joins its predecessor: one ring; start anywhere.
 }
 
-void Segmenter::segment(const LaserScan& scan, Segmentation& out,
-                        const std::function<bool(const Eigen::Vector2d&)>& seen_before) {
-  struct Asking {  // The question is asked during this call only, however it ends.
-    const std::function<bool(const Eigen::Vector2d&)>*& held;
-    ~Asking() { held = nullptr; }
-  } asking{seen_before_};
-  seen_before_ = seen_before ? &seen_before : nullptr;
-  segment(scan, out);
-}
+void Segmenter::segment(const LaserScan& scan, Segmentation& out) { segment(scan, out, {}); }
 
-void Segmenter::segment(const LaserScan& scan, Segmentation& out) {
+void Segmenter::segment(const LaserScan& scan, Segmentation& out, const SeenBefore& seen_before) {
   out.issue = check_scan(scan);
   out.beam_labels.clear();
   out.objects.clear();
@@ -290,7 +282,7 @@ void Segmenter::segment(const LaserScan& scan, Segmentation& out) {
   out.clusters = static_cast<std::int32_t>(clusters_.size());
 
   merge_clusters(seam_continuous, st.run, n, scan.angle_increment_rad);
-  write_objects(scan, out);
+  write_objects(scan, out, seen_before);
 }
 
 // Facing-edge merge. Clusters are visited in processing order; each is appended to the open object
@@ -414,7 +406,8 @@ EdgeNeighbour Segmenter::neighbour_of(const LaserScan& scan, std::int32_t beam, 
   return scan.ranges_m[j] < scan.ranges_m[beam] ? EdgeNeighbour::kCloser : EdgeNeighbour::kFarther;
 }
 
-std::int32_t Segmenter::min_points_of(const LaserScan& scan, const Object& obj) const {
+std::int32_t Segmenter::min_points_of(const LaserScan& scan, const Object& obj,
+                                      const SeenBefore& seen_before) const {
   const std::int32_t n_min = config_.min_points;
   if (!(config_.min_width_m > 0.0) || n_min <= 2 || obj.count >= n_min) return n_min;
   // The beams an object min_width_m wide covers at the range of this one's centroid.
@@ -439,19 +432,20 @@ std::int32_t Segmenter::min_points_of(const LaserScan& scan, const Object& obj) 
       !stands_out(clusters_[obj.last_cluster].last_beam, +1)) {
     return n_min;
   }
-  if (seen_before_ != nullptr) {
+  if (seen_before) {
     const double count = static_cast<double>(obj.count);
-    if (!(*seen_before_)(Eigen::Vector2d(obj.sum_x / count, obj.sum_y / count))) return n_min;
+    if (!seen_before(Eigen::Vector2d(obj.sum_x / count, obj.sum_y / count))) return n_min;
   }
   return std::max<std::int32_t>(2, static_cast<std::int32_t>(std::lround(covered)));
 }
 
-void Segmenter::write_objects(const LaserScan& scan, Segmentation& out) {
+void Segmenter::write_objects(const LaserScan& scan, Segmentation& out,
+                              const SeenBefore& seen_before) {
   // Objects with at least N_min points survive, ordered by first beam.
   order_.clear();
   for (std::int32_t o = 0; o < static_cast<std::int32_t>(work_objects_.size()); ++o) {
     const Object& obj = work_objects_[o];
-    if (obj.alive && obj.count >= min_points_of(scan, obj)) order_.push_back(o);
+    if (obj.alive && obj.count >= min_points_of(scan, obj, seen_before)) order_.push_back(o);
     if (obj.alive && obj.cluster_count > 1) out.merges += obj.cluster_count - 1;
   }
   std::sort(order_.begin(), order_.end(), [&](std::int32_t a, std::int32_t b) {

@@ -355,6 +355,7 @@ class DynamicFilter {
     Pose2 sensor_pose;
     double angle_min_rad = 0.0;
     double increment_rad = 0.0;
+    bool full_circle = false;  // As its segmentation found it.
     bool has_return_near(const Eigen::Vector2d& point_m, double radius_m) const;
   };
   std::array<EarlierScan, 2> earlier_scans_;

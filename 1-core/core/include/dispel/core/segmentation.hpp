@@ -155,8 +155,8 @@ class Segmenter {
   /// The same; with min_width_m, an object below min_points is one only where @p seen_before says
   /// something was at its centroid (sensor frame, metres) in the scan before: a far leg is there
   /// scan after scan, a sporadic return outdoors is not.
-  void segment(const LaserScan& scan, Segmentation& out,
-               const std::function<bool(const Eigen::Vector2d&)>& seen_before);
+  using SeenBefore = std::function<bool(const Eigen::Vector2d&)>;
+  void segment(const LaserScan& scan, Segmentation& out, const SeenBefore& seen_before);
 
   /// Convenience overload returning a fresh result.
   Segmentation segment(const LaserScan& scan) {
@@ -172,14 +172,15 @@ class Segmenter {
   std::int32_t find_rotation_start(const LaserScan& scan, bool& seam_continuous) const;
   void merge_clusters(bool seam_continuous, std::int32_t final_run, std::int32_t n,
                       double increment_rad);
-  void write_objects(const LaserScan& scan, Segmentation& out);
-  /// N_min for @p obj: min_points, lowered with range by min_width_m.
-  std::int32_t min_points_of(const LaserScan& scan, const segmentation_detail::Object& obj) const;
+  void write_objects(const LaserScan& scan, Segmentation& out, const SeenBefore& seen_before);
+  /// N_min for @p obj: min_points, lowered with range by min_width_m (where @p seen_before, when
+  /// given, says yes).
+  std::int32_t min_points_of(const LaserScan& scan, const segmentation_detail::Object& obj,
+                             const SeenBefore& seen_before) const;
   EdgeNeighbour neighbour_of(const LaserScan& scan, std::int32_t beam, int step) const;
 
   SegmentationConfig config_;
   double cluster_gap_sq_m2_;
-  const std::function<bool(const Eigen::Vector2d&)>* seen_before_ = nullptr;  // During segment().
 
   // Geometry cache: recomputed only when the scan's angles or size change.
   double cached_angle_min_rad_ = 0.0;

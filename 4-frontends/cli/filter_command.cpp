@@ -47,6 +47,7 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
   j["free_space_refuted"] = s.counters.free_space_refuted;
   j["still_alone_to_static"] = s.counters.still_alone_to_static;
   j["fragment_follows"] = s.counters.fragment_follows;
+  j["fragments_let_go"] = s.counters.fragments_let_go;
   j["laser_only"] = s.laser_only;
   j["beams_kept_explained"] = s.counters.beams_kept_explained;
   j["registration"] = {{"enabled", s.config.registration.enabled},

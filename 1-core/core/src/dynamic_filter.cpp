@@ -173,6 +173,7 @@ void DynamicFilter::reset() {
   registration_.reset();
   have_previous_ = false;  // recurring_ is kept: the robot's parts are where they were.
   earlier_count_ = 0;
+  previous_ranges_.clear();
 }
 
 void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& sensor_pose,
@@ -231,7 +232,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   if (checked.learn) {
     update_velocities(scan.stamp_s);
     classify(scan, pose, out.segmentation);
-    follow_fragments(scan, out.segmentation);
+    follow_fragments(scan, out.segmentation, pose);
     // The body is learned only when the sensor's motion was measured (by odometry, or by a
     // registration that holds in every direction): a guessed motion while the robot stands would
     // count someone standing in front of it as moving with it.
@@ -694,22 +695,11 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
       }
     }
   }
-  const double elapsed = stamp_s - track.marked_s;
-  if (track.free_space_pending && elapsed >= kFreeSpaceDecision_s) {
-    const double moved = moved_since_marked(track, obs);
-    // Decided once, when the object has had time to move (see kFreeSpaceDecision_s): confirmed
-    // when it has moved as a walker can, or it is beside a track that has (unless that is what
-    // marked it: a low thing first hit up close beside a walker, office_revisits' walls); else
-    // refuted.
-    track.free_space_pending = false;
-    const bool moved_plausibly =
-        moved > kFreeSpaceConfirm_m && moved <= kFreeSpaceConfirm_m + kMaxWalkerSpeed_mps * elapsed;
-    if (!moved_plausibly &&
-        (track.marked_beside || !beside_moving_track(track, obs.points[kCentroid]))) {
-      track.free_space_refuted = true;
-      track.cls = initial_class_state(cc);
-      ++counters_.free_space_refuted;
-    }
+  if (track.free_space_pending) {
+    const bool explained =
+        obs.explained_share >= kExplainedShare && !slides_unlike_the_sensor(track, obs);
+    decide_free_space(track, moved_since_marked(track, obs), obs.points[kCentroid], explained,
+                      stamp_s);
   }
   // Part of the robot: still in the sensor frame for long, near it.
   if (track.local_still.left(obs.local_centroid, kAttachedTolerance_m)) {
@@ -744,7 +734,29 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
   if (track.cls.object_class != ObjectClass::kDynamic) track.extent_m = obs.extent_m;
   track.last_seen_s = stamp_s;
   track.missed_scans = 0;
+  track.fragments_still_since_s = -1.0;
   ++track.age_scans;
+}
+
+// The verdict of free space on a track it marked, once the object has had time to move (see
+// kFreeSpaceDecision_s): refuted when the map explains the object now (@p explained: a surface
+// that has stood there, which the track took after it lost what free space marked, or grew onto
+// as more of it came into view); else confirmed when it has moved (@p moved since it was marked)
+// as a walker can, or it is beside a track that has (unless that is what marked it: a low thing
+// first hit up close beside a walker, office_revisits' walls); else refuted.
+void DynamicFilter::decide_free_space(Track& track, double moved, const Eigen::Vector2d& centroid,
+                                      bool explained, double stamp_s) {
+  const double elapsed = stamp_s - track.marked_s;
+  if (!track.free_space_pending || elapsed < kFreeSpaceDecision_s) return;
+  track.free_space_pending = false;
+  const bool moved_plausibly =
+      moved > kFreeSpaceConfirm_m && moved <= kFreeSpaceConfirm_m + kMaxWalkerSpeed_mps * elapsed;
+  if (explained ||
+      (!moved_plausibly && (track.marked_beside || !beside_moving_track(track, centroid)))) {
+    track.free_space_refuted = true;
+    track.cls = initial_class_state(config_.classification);
+    ++counters_.free_space_refuted;
+  }
 }
 
 // A track for every object that matched none; one that split from a track (see
@@ -1070,18 +1082,21 @@ void DynamicFilter::remove_edge_pixels(const LaserScan& scan, FilterResult& out)
 // beam_label() removes with it), when at least two of them, and half of them, lie in space seen
 // free. Its centroid is updated with theirs; its edges are re-anchored on the outermost of them
 // with their velocity held (a fragment's ends are not the walker's). A walker who walks on until
-// each leg is fewer beams than N_min stays followed and removed.
-void DynamicFilter::follow_fragments(const LaserScan& scan, const Segmentation& segmentation) {
+// each leg is fewer beams than N_min stays followed and removed. Fragments that hold still near
+// the sensor (a part of the robot, in space seen free because the robot drives) are let go.
+void DynamicFilter::follow_fragments(const LaserScan& scan, const Segmentation& segmentation,
+                                     const Pose2& sensor_pose) {
   const double limit = config_.tracking.fragment_distance_m;
   if (!config_.tracking.follow_fragments || !(limit > 0.0) || !config_.free_space.enabled) return;
   const std::vector<std::int32_t>& labels = segmentation.beam_labels;
+  const bool have_previous = previous_ranges_.size() == scan.size();
   for (Track& t : tracks_) {
     if (!moving_now(t) || t.object_index >= 0) continue;
     const double dt = scan.stamp_s - t.last_seen_s;
     if (!(dt > 0.0)) continue;
     const PredictedOutline outline(t.kf[kFirst], t.kf[kLast], dt);
     Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-    std::int32_t count = 0, in_free = 0;
+    std::int32_t count = 0, in_free = 0, same_range = 0;
     std::size_t first = 0, last = 0;
     for (std::size_t b = 0; b < scan.size(); ++b) {
       if (labels[b] != kLabelNoise || !scan.is_valid(b)) continue;
@@ -1093,13 +1108,36 @@ void DynamicFilter::follow_fragments(const LaserScan& scan, const Segmentation& 
       sum += p;
       ++count;
       if (free_space_.known_free(p)) ++in_free;
+      const float r = scan.ranges_m[b];
+      if (have_previous && std::abs(previous_ranges_[b] - r) <=
+                               kRecurringTolerance_m + kRecurringRelativeTolerance * r) {
+        ++same_range;
+      }
     }
-    if (count < 2 || 2 * in_free < count) continue;
+    if (count < 2 || 2 * in_free < count) {
+      t.fragments_still_since_s = -1.0;
+      continue;
+    }
+    const Eigen::Vector2d centroid = sum / static_cast<double>(count);
+    // Fragments whose beams return the ranges they returned the scan before, near the sensor,
+    // for kAttachedTime_s: a part of the robot, not a walker (whose legs never hold still in the
+    // sensor frame); the track lets them go and is static again.
+    if (2 * same_range < count || t.fragments_still_since_s < 0.0) {
+      t.fragments_still_since_s = scan.stamp_s;
+    }
+    if (scan.stamp_s - t.fragments_still_since_s >= kAttachedTime_s &&
+        (centroid - sensor_pose.translation()).norm() <= kAttachedRange_m) {
+      t.cls = initial_class_state(config_.classification);
+      t.free_space_pending = false;
+      t.fragments_still_since_s = -1.0;
+      ++counters_.fragments_let_go;
+      continue;
+    }
     double speed = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 3; ++k) {
       PointVelocityFilter& kf = t.kf[k];
       if (k == kCentroid) {
-        kf.predict_and_update(sum / static_cast<double>(count), dt, config_.velocity);
+        kf.predict_and_update(centroid, dt, config_.velocity);
       } else {
         kf.predict_and_hold(beam_points_[k == kFirst ? first : last], dt, config_.velocity);
       }
@@ -1110,6 +1148,7 @@ void DynamicFilter::follow_fragments(const LaserScan& scan, const Segmentation& 
     t.missed_scans = 0;
     ++counters_.fragment_follows;
   }
+  previous_ranges_ = scan.ranges_m;
 }
 
 void DynamicFilter::write_tracks(FilterResult& out) const {

@@ -77,6 +77,9 @@ struct FilterCounters {
   /// Scans in which a dynamic track was followed through fragments (tracking.follow_fragments),
   /// summed over the tracks.
   std::int64_t fragment_follows = 0;
+  /// Dynamic tracks that let their fragments go: near the sensor, their beams returned the ranges
+  /// of the scan before for kAttachedTime_s (a part of the robot, not a walker).
+  std::int64_t fragments_let_go = 0;
   /// Beams of moving or unknown objects kept because the registered map explains them
   /// (registration.explained_*).
   std::int64_t beams_kept_explained = 0;
@@ -255,6 +258,9 @@ class DynamicFilter {
     bool marked_edges_trusted = false;
     double marked_s = 0.0;
     bool attached = false;  // Judged part of the robot in the last scan it was seen.
+    // Since when the fragments it follows have returned the ranges of the scan before (-1: not
+    // following such fragments).
+    double fragments_still_since_s = -1.0;
   };
 
   // What the first step decides about a scan.
@@ -292,6 +298,8 @@ class DynamicFilter {
   bool similar_extent(const Observation& obs, const Track& track) const;
   // Steps 5 and 6.
   void update_class(Track& track, const Observation& obs, double stamp_s);
+  void decide_free_space(Track& track, double moved, const Eigen::Vector2d& centroid,
+                         bool explained, double stamp_s);
   void start_tracks(double stamp_s);
   void mark_objects_in_free_space(const LaserScan& scan, const Segmentation& segmentation);
   void spread_to_companions();
@@ -301,7 +309,8 @@ class DynamicFilter {
   BeamLabel beam_label(const LaserScan& scan, std::size_t b, std::int32_t segment_label,
                        bool learned);
   bool near_dynamic_track(const Eigen::Vector2d& point_m, double stamp_s) const;
-  void follow_fragments(const LaserScan& scan, const Segmentation& segmentation);
+  void follow_fragments(const LaserScan& scan, const Segmentation& segmentation,
+                        const Pose2& sensor_pose);
   void remove_edge_pixels(const LaserScan& scan, FilterResult& out);
   void write_tracks(FilterResult& out) const;
 
@@ -336,6 +345,7 @@ class DynamicFilter {
   // robot), with the share of the scans counted that returned it there (decayed lazily, as
   // RecurringRange). What such a beam returns well beyond that range moves with the robot.
   std::vector<RecurringRange> body_;
+  std::vector<float> previous_ranges_;  // The last scan follow_fragments() saw (learned scans).
   std::vector<char> attached_;  // Scratch: per object of this scan, judged part of the robot.
   std::vector<double> spacing_limit_;         // Scratch: per object, for free-space evidence,
   std::vector<double> points_needed_;         // the points in free space that would mark it,

@@ -695,11 +695,26 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
       }
     }
   }
-  if (track.free_space_pending) {
+  const double elapsed = stamp_s - track.marked_s;
+  if (track.free_space_pending && elapsed >= kFreeSpaceDecision_s) {
+    // Decided once, when the object has had time to move (see kFreeSpaceDecision_s): refuted
+    // when the map explains the object now (a surface that has stood there, which the track took
+    // after it lost what free space marked, or grew onto as more of it came into view); else
+    // confirmed when it has moved as a walker can, or it is beside a track that has (unless that
+    // is what marked it: a low thing first hit up close beside a walker, office_revisits'
+    // walls); else refuted.
+    track.free_space_pending = false;
+    const double moved = moved_since_marked(track, obs);
+    const bool moved_plausibly =
+        moved > kFreeSpaceConfirm_m && moved <= kFreeSpaceConfirm_m + kMaxWalkerSpeed_mps * elapsed;
     const bool explained =
         obs.explained_share >= kExplainedShare && !slides_unlike_the_sensor(track, obs);
-    decide_free_space(track, moved_since_marked(track, obs), obs.points[kCentroid], explained,
-                      stamp_s);
+    if (explained || (!moved_plausibly && (track.marked_beside ||
+                                           !beside_moving_track(track, obs.points[kCentroid])))) {
+      track.free_space_refuted = true;
+      track.cls = initial_class_state(cc);
+      ++counters_.free_space_refuted;
+    }
   }
   // Part of the robot: still in the sensor frame for long, near it.
   if (track.local_still.left(obs.local_centroid, kAttachedTolerance_m)) {
@@ -736,27 +751,6 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
   track.missed_scans = 0;
   track.fragments_still_since_s = -1.0;
   ++track.age_scans;
-}
-
-// The verdict of free space on a track it marked, once the object has had time to move (see
-// kFreeSpaceDecision_s): refuted when the map explains the object now (@p explained: a surface
-// that has stood there, which the track took after it lost what free space marked, or grew onto
-// as more of it came into view); else confirmed when it has moved (@p moved since it was marked)
-// as a walker can, or it is beside a track that has (unless that is what marked it: a low thing
-// first hit up close beside a walker, office_revisits' walls); else refuted.
-void DynamicFilter::decide_free_space(Track& track, double moved, const Eigen::Vector2d& centroid,
-                                      bool explained, double stamp_s) {
-  const double elapsed = stamp_s - track.marked_s;
-  if (!track.free_space_pending || elapsed < kFreeSpaceDecision_s) return;
-  track.free_space_pending = false;
-  const bool moved_plausibly =
-      moved > kFreeSpaceConfirm_m && moved <= kFreeSpaceConfirm_m + kMaxWalkerSpeed_mps * elapsed;
-  if (explained ||
-      (!moved_plausibly && (track.marked_beside || !beside_moving_track(track, centroid)))) {
-    track.free_space_refuted = true;
-    track.cls = initial_class_state(config_.classification);
-    ++counters_.free_space_refuted;
-  }
 }
 
 // A track for every object that matched none; one that split from a track (see

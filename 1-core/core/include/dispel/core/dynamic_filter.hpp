@@ -298,8 +298,6 @@ class DynamicFilter {
   bool similar_extent(const Observation& obs, const Track& track) const;
   // Steps 5 and 6.
   void update_class(Track& track, const Observation& obs, double stamp_s);
-  void decide_free_space(Track& track, double moved, const Eigen::Vector2d& centroid,
-                         bool explained, double stamp_s);
   void start_tracks(double stamp_s);
   void mark_objects_in_free_space(const LaserScan& scan, const Segmentation& segmentation);
   void spread_to_companions();

@@ -87,7 +87,8 @@ void FreeSpaceMap::clear() {
   }
 }
 
-bool FreeSpaceMap::cell_of(const Eigen::Vector2d& p, std::int64_t& ix, std::int64_t& iy) const {
+inline bool FreeSpaceMap::cell_of(const Eigen::Vector2d& p, std::int64_t& ix,
+                                  std::int64_t& iy) const {
   if (!placed_) return false;
   const double fx = (p.x() - anchor_.x()) / config_.cell_size_m;
   const double fy = (p.y() - anchor_.y()) / config_.cell_size_m;
@@ -107,7 +108,7 @@ bool FreeSpaceMap::cell_of(const Eigen::Vector2d& p, std::int64_t& ix, std::int6
   return tile_within_reach(ix >> kTileBits, iy >> kTileBits);
 }
 
-const FreeSpaceMap::Cell* FreeSpaceMap::find(std::int64_t ix, std::int64_t iy) const {
+inline const FreeSpaceMap::Cell* FreeSpaceMap::find(std::int64_t ix, std::int64_t iy) const {
   // Arithmetic shifts: floor division and a non-negative remainder for negative cells too.
   const std::int64_t tx = ix >> kTileBits, ty = iy >> kTileBits;
   if (!tile_within_reach(tx, ty)) return nullptr;
@@ -123,7 +124,7 @@ const FreeSpaceMap::Cell* FreeSpaceMap::find(const Eigen::Vector2d& p) const {
   return cell_of(p, ix, iy) ? find(ix, iy) : nullptr;
 }
 
-FreeSpaceMap::Cell* FreeSpaceMap::tile(std::int64_t tx, std::int64_t ty) {
+inline FreeSpaceMap::Cell* FreeSpaceMap::tile(std::int64_t tx, std::int64_t ty) {
   const std::size_t slot = slot_of(tx, ty);
   Cell* cells = &cells_[slot * static_cast<std::size_t>(kTileCells)];
   TileTag& tag = tags_[slot];
@@ -135,7 +136,7 @@ FreeSpaceMap::Cell* FreeSpaceMap::tile(std::int64_t tx, std::int64_t ty) {
   return cells;
 }
 
-bool FreeSpaceMap::cell_free(const Cell* cell) const {
+inline bool FreeSpaceMap::cell_free(const Cell* cell) const {
   return cell != nullptr && cell->balance <= -config_.min_free_observations &&
          stamp_s_ - (epoch_s_ + cell->last_free_s) <= config_.memory_s;
 }

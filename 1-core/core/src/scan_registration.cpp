@@ -25,6 +25,14 @@ Pose2 scaled(const Pose2& per_s, double dt) {
   return {per_s.x_m * dt, per_s.y_m * dt, per_s.yaw_rad * dt};
 }
 Eigen::Vector2d perp(const Eigen::Vector2d& v) { return {-v.y(), v.x()}; }
+
+// std::floor(v) as an integer for a finite @p v, without a call into libm (the voxel of every
+// point asked about, many times a scan): truncation, then one less for a negative value that was
+// not whole.
+std::int64_t floor_int(double v) {
+  const auto i = static_cast<std::int64_t>(v);
+  return static_cast<double>(i) > v ? i - 1 : i;
+}
 // Range at which an angular error is turned into metres for the adaptive threshold.
 constexpr double kThresholdRange_m = 10.0;
 // Sensor motion below which a scan says nothing about the seed's error.
@@ -167,12 +175,11 @@ void ScanRegistration::hold_guess_sideways() {
   velocity_per_s_.y_m = v.y();
 }
 
-ScanRegistration::Key ScanRegistration::key_of(const Eigen::Vector2d& p) const {
-  return key_at(static_cast<std::int64_t>(std::floor(p.x() / config_.voxel_size_m)),
-                static_cast<std::int64_t>(std::floor(p.y() / config_.voxel_size_m)));
+inline ScanRegistration::Key ScanRegistration::key_of(const Eigen::Vector2d& p) const {
+  return key_at(floor_int(p.x() / config_.voxel_size_m), floor_int(p.y() / config_.voxel_size_m));
 }
 
-bool ScanRegistration::structure(const Voxel& v) const {
+inline bool ScanRegistration::structure(const Voxel& v) const {
   return v.scans >= config_.explained_min_scans &&
          v.last_stamp_s - v.first_stamp_s >= (v.in_free_space ? config_.explained_min_span_in_free_s
                                                               : config_.explained_min_span_s);
@@ -182,10 +189,10 @@ bool ScanRegistration::explained(std::size_t b) const {
   if (b >= world_points_.size()) return false;
   const Eigen::Vector2d& p = world_points_[b];
   if (!std::isfinite(p.x())) return false;
-  const auto ix = static_cast<std::int64_t>(std::floor(p.x() / config_.voxel_size_m));
-  const auto iy = static_cast<std::int64_t>(std::floor(p.y() / config_.voxel_size_m));
-  // The voxels around the point that can explain it, found once for consecutive beams in the
-  // same voxel (until the next registration or add()).
+  const auto ix = floor_int(p.x() / config_.voxel_size_m);
+  const auto iy = floor_int(p.y() / config_.voxel_size_m);
+  // The points around it that can explain it, found once for consecutive beams in the same voxel
+  // (until the next registration or add()).
   if (!explaining_valid_ || ix != explaining_ix_ || iy != explaining_iy_) {
     explaining_.clear();
     for (std::int64_t x = ix - 1; x <= ix + 1; ++x) {
@@ -197,7 +204,13 @@ bool ScanRegistration::explained(std::size_t b) const {
             last_stamp_s_ - v->last_stamp_s > config_.explained_max_age_s) {
           continue;
         }
-        explaining_.push_back(v);
+        const double min_age =
+            v->in_free_space ? config_.explained_min_span_in_free_s : config_.explained_min_span_s;
+        for (std::uint8_t i = 0; i < v->count; ++i) {
+          if (last_stamp_s_ - v->stamps_s[i] >= min_age) {
+            explaining_.push_back(v->points[i].cast<double>());
+          }
+        }
       }
     }
     explaining_valid_ = true;
@@ -205,15 +218,8 @@ bool ScanRegistration::explained(std::size_t b) const {
     explaining_iy_ = iy;
   }
   const double limit2 = config_.explained_distance_m * config_.explained_distance_m;
-  for (const Voxel* v : explaining_) {
-    const double min_age =
-        v->in_free_space ? config_.explained_min_span_in_free_s : config_.explained_min_span_s;
-    for (std::uint8_t i = 0; i < v->count; ++i) {
-      if (last_stamp_s_ - v->stamps_s[i] >= min_age &&
-          (v->points[i].cast<double>() - p).squaredNorm() <= limit2) {
-        return true;
-      }
-    }
+  for (const Eigen::Vector2d& q : explaining_) {
+    if ((q - p).squaredNorm() <= limit2) return true;
   }
   return false;
 }
@@ -320,8 +326,8 @@ Eigen::Vector2d ScanRegistration::map_normal(const Voxel& voxel, std::uint8_t sl
     const Eigen::Vector2d m = v.points[slot].cast<double>();
     const double size = config_.voxel_size_m;
     const auto reach = static_cast<std::int64_t>(std::ceil(kMapNormalRadius_m / size));
-    const auto mx = static_cast<std::int64_t>(std::floor(m.x() / size));
-    const auto my = static_cast<std::int64_t>(std::floor(m.y() / size));
+    const auto mx = floor_int(m.x() / size);
+    const auto my = floor_int(m.y() / size);
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
     Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
     int count = 0;
@@ -382,25 +388,29 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
                                          bool need_any, double& best, Reference& found) {
   const Eigen::Vector2d& at_seed = seed_points_[i];
   const double size = config_.voxel_size_m;
-  const auto sx = static_cast<std::int64_t>(std::floor(at_seed.x() / size));
-  const auto sy = static_cast<std::int64_t>(std::floor(at_seed.y() / size));
+  const auto sx = floor_int(at_seed.x() / size);
+  const auto sy = floor_int(at_seed.y() / size);
   const double radius2 = radius_ * radius_;
   const std::int64_t side = 2 * reach_ + 1;
   Nearby& nearby = nearby_[i];
   const auto take = [&](const Eigen::Vector2d& point, const Reference& r) {
     const double d2 = (point - q).squaredNorm();
+    const bool listed = d2 <= kNearby_m * kNearby_m && nearby.count <= kNearbyMax;
     if (d2 < best || (d2 == best && r.order < found.order)) {
       best = d2;
       found = r;
+      nearby.nearest = listed ? nearby.count : -1;
     }
     if (d2 <= kNearby_m * kNearby_m) {
-      if (nearby.count <= kNearbyMax) nearby.near[static_cast<std::size_t>(nearby.count)] = r;
+      if (listed)
+        nearby.near[static_cast<std::size_t>(nearby.count)] = Near{r, point.cast<float>(), d2};
       ++nearby.count;
     }
   };
   const auto walk_list = [&]() {
     nearby.origin = q;
     nearby.count = 0;
+    nearby.nearest = -1;
     for (std::int32_t k = listed_[i].begin; k < listed_[i].end; ++k) {
       const Candidate& c = candidates_[static_cast<std::size_t>(k)];
       take(c.point, c.reference);
@@ -412,7 +422,7 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
   // The voxels within kNearby_m of q along each axis (a stored point may lie a float's rounding
   // outside its voxel: a margin), within the seed's reach.
   constexpr double kMargin_m = 1e-4;
-  const auto cell = [&](double v) { return static_cast<std::int64_t>(std::floor(v / size)); };
+  const auto cell = [&](double v) { return floor_int(v / size); };
   const std::int64_t near_x0 = std::max(sx - reach_, cell(q.x() - kNearby_m - kMargin_m));
   const std::int64_t near_x1 = std::min(sx + reach_, cell(q.x() + kNearby_m + kMargin_m));
   const std::int64_t near_y0 = std::max(sy - reach_, cell(q.y() - kNearby_m - kMargin_m));
@@ -435,6 +445,7 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
   };
   nearby.origin = q;
   nearby.count = 0;
+  nearby.nearest = -1;
   bool any = false;
   each_candidate(near_x0, near_x1, near_y0, near_y1,
                  [&](const Eigen::Vector2d& point, const Reference& r) {
@@ -526,14 +537,29 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
           nearby.nearest_m + (q - nearby.at).norm() + (q - nearby.origin).norm() +
                   kDistanceMargin_m <=
               kNearby_m) {
-        for (std::int32_t k = 0; k < nearby.count; ++k) {
-          const Reference& r = nearby.near[static_cast<std::size_t>(k)];
-          const double d2 = (r.voxel->points[r.slot].cast<double>() - q).squaredNorm();
-          if (d2 < best || (d2 == best && r.order < found.order)) {
+        // The nearest of them (the first of equals in their order), the last nearest tried first:
+        // one farther from the origin than the nearest so far is from the point, by more than the
+        // point is from the origin, is not looked at.
+        const double moved = (q - nearby.origin).norm();
+        double limit2 = kInfinity;
+        std::int32_t nearest = -1;
+        const auto consider = [&](std::int32_t k) {
+          const Near& near = nearby.near[static_cast<std::size_t>(k)];
+          if (near.from_origin2 > limit2) return;
+          const double d2 = (near.point.cast<double>() - q).squaredNorm();
+          if (d2 < best || (d2 == best && near.reference.order < found.order)) {
             best = d2;
-            found = r;
+            found = near.reference;
+            nearest = k;
+            const double reach = moved + std::sqrt(best) + kDistanceMargin_m;
+            limit2 = reach * reach;
           }
+        };
+        if (nearby.nearest >= 0) consider(nearby.nearest);
+        for (std::int32_t k = 0; k < nearby.count; ++k) {
+          if (k != nearby.nearest) consider(k);
         }
+        nearby.nearest = nearest;
       } else if (nearest_candidate(i, q, threshold, iteration == 0 && structure_only_, best,
                                    found)) {
         ++covered;

@@ -322,21 +322,28 @@ class ScanRegistration {
   std::vector<Listed> listed_;
   std::uint32_t cache_generation_ = 0;
   // Each sample point's candidates within kNearby_m of where it was when all its candidates were
-  // last looked at (in their order; count -1: more than fit), and its nearest candidate's
-  // distance at the last iteration. While that distance plus how far the point moved since
-  // stays within kNearby_m, its nearest is one of these (the others are farther).
+  // last looked at (origin; in their order; count -1: more than fit), which of them was its
+  // nearest at the last iteration (-1: none of them), and that one's distance. While that
+  // distance plus how far the point moved since stays within kNearby_m, its nearest is one of
+  // these (the others are farther).
   static constexpr double kNearby_m = 0.2;
   static constexpr std::int32_t kNearbyMax = 31;
+  struct Near {
+    Reference reference;
+    Eigen::Vector2f point;  // The map's, kept here: the later iterations read them in one place.
+    double from_origin2;    // Squared distance from the origin.
+  };
   struct Nearby {
     Eigen::Vector2d origin;
     Eigen::Vector2d at;
     double nearest_m = 0.0;
+    std::int32_t nearest = -1;
     std::int32_t count = -1;
-    std::array<Reference, kNearbyMax + 1> near{};
+    std::array<Near, kNearbyMax + 1> near{};
   };
   std::vector<Nearby> nearby_;
-  // explained(): the voxels that can explain points of one voxel, kept for the next beam.
-  mutable std::vector<const Voxel*> explaining_;
+  // explained(): the map points that can explain points of one voxel, kept for the next beam.
+  mutable std::vector<Eigen::Vector2d> explaining_;
   mutable bool explaining_valid_ = false;
   mutable std::int64_t explaining_ix_ = 0, explaining_iy_ = 0;
 };

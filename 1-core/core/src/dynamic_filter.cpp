@@ -192,12 +192,10 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
   // dynamic track's outline, predicted to the scan's time.
   // Asked per sample point: only when there is such a track (most scans of a recording without
   // people have none).
-  const double stamp = scan.stamp_s;
-  const bool any_moving =
-      std::any_of(tracks_.begin(), tracks_.end(), [](const Track& t) { return moving_now(t); });
+  predict_moving_outlines(scan.stamp_s);
   std::function<bool(const Eigen::Vector2d&)> moving;
-  if (any_moving) {
-    moving = [this, stamp](const Eigen::Vector2d& p) { return near_dynamic_track(p, stamp); };
+  if (!moving_outlines_.empty()) {
+    moving = [this](const Eigen::Vector2d& p) { return near_dynamic_track(p); };
   }
   const Pose2 pose = registering
                          ? registration_.register_scan(scan, sensor_pose, out.registration, moving)
@@ -905,10 +903,11 @@ void DynamicFilter::label(const LaserScan& scan, const ScanCheck& check, FilterR
   out.labels.resize(scan.size());
   out.removed_dynamic = out.removed_unknown = 0;
   const std::vector<std::int32_t>& segment_labels = out.segmentation.beam_labels;
+  predict_moving_outlines(scan.stamp_s);
   for (std::size_t b = 0; b < scan.size(); ++b) {
     const std::int32_t l = segment_labels[b];
     BeamLabel label = BeamLabel::kInvalid;
-    if (l >= 0 || l == kLabelNoise) label = beam_label(scan, b, l, check.learn);
+    if (l >= 0 || l == kLabelNoise) label = beam_label(b, l, check.learn);
     if (label == BeamLabel::kDynamic) {
       ++out.removed_dynamic;
       out.filtered.ranges_m[b] = std::numeric_limits<float>::quiet_NaN();
@@ -927,8 +926,7 @@ void DynamicFilter::label(const LaserScan& scan, const ScanCheck& check, FilterR
 // the thesis: a beam of no object beside a dynamic track is one of its fragments; a beam of a
 // moving object that ends where something has stood for a while is kept. The beam's point comes
 // from place_beams(), once per scan.
-BeamLabel DynamicFilter::beam_label(const LaserScan& scan, std::size_t b,
-                                    std::int32_t segment_label, bool learned) {
+BeamLabel DynamicFilter::beam_label(std::size_t b, std::int32_t segment_label, bool learned) {
   const FreeSpaceConfig& fs = config_.free_space;
   const bool check_occupied = learned && fs.enabled && fs.keep_long_occupied;
   const bool explained = !explained_.empty() && explained_[b] != 0;
@@ -936,7 +934,7 @@ BeamLabel DynamicFilter::beam_label(const LaserScan& scan, std::size_t b,
     if (!learned || !(config_.tracking.fragment_distance_m > 0.0) || explained)
       return BeamLabel::kNoObject;
     const Eigen::Vector2d point = beam_points_[b];
-    if (near_dynamic_track(point, scan.stamp_s) &&
+    if (near_dynamic_track(point) &&
         !(check_occupied && free_space_.hit_balance(point) >= fs.max_recent_hits)) {
       ++counters_.beams_removed_fragments;
       return BeamLabel::kDynamic;
@@ -1005,30 +1003,31 @@ bool DynamicFilter::beside_moving_track(const Track& self, const Eigen::Vector2d
   return false;
 }
 
-// Whether a point lies within fragment_distance_m of the outline (edge to edge, predicted to now)
-// of a dynamic track seen in this scan or missed for a few scans at most.
-// A track's outline, the segment between its edge points, predicted @p dt after it was last seen.
-struct PredictedOutline {
-  Eigen::Vector2d a, ab;
-  double len2;
-  PredictedOutline(const PointVelocityFilter& first, const PointVelocityFilter& last, double dt)
-      : a(first.predicted_position(dt)),
-        ab(last.predicted_position(dt) - a),
-        len2(ab.squaredNorm()) {}
-  double distance(const Eigen::Vector2d& p) const {
-    const double u = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-    return (p - (a + u * ab)).norm();
-  }
-};
+DynamicFilter::PredictedOutline::PredictedOutline(const PointVelocityFilter& first,
+                                                  const PointVelocityFilter& last, double dt)
+    : a(first.predicted_position(dt)),
+      ab(last.predicted_position(dt) - a),
+      len2(ab.squaredNorm()) {}
 
-bool DynamicFilter::near_dynamic_track(const Eigen::Vector2d& point_m, double stamp_s) const {
-  const double limit = config_.tracking.fragment_distance_m;
+double DynamicFilter::PredictedOutline::distance(const Eigen::Vector2d& p) const {
+  const double u = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + u * ab)).norm();
+}
+
+// The outlines of the dynamic tracks seen in this scan or missed for a few scans at most, each
+// predicted to @p stamp_s.
+void DynamicFilter::predict_moving_outlines(double stamp_s) {
+  moving_outlines_.clear();
   for (const Track& t : tracks_) {
-    if (!moving_now(t)) continue;
-    const PredictedOutline outline(t.kf[kFirst], t.kf[kLast], stamp_s - t.last_seen_s);
-    if (outline.distance(point_m) <= limit) return true;
+    if (moving_now(t))
+      moving_outlines_.emplace_back(t.kf[kFirst], t.kf[kLast], stamp_s - t.last_seen_s);
   }
-  return false;
+}
+
+bool DynamicFilter::near_dynamic_track(const Eigen::Vector2d& point_m) const {
+  const double limit = config_.tracking.fragment_distance_m;
+  return std::any_of(moving_outlines_.begin(), moving_outlines_.end(),
+                     [&](const PredictedOutline& o) { return o.distance(point_m) <= limit; });
 }
 
 // Beyond the thesis (tracking.remove_edge_pixels): a scanner's beam that grazes an object's edge

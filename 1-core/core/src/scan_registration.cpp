@@ -395,22 +395,21 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
   Nearby& nearby = nearby_[i];
   const auto take = [&](const Eigen::Vector2d& point, const Reference& r) {
     const double d2 = (point - q).squaredNorm();
-    const bool listed = d2 <= kNearby_m * kNearby_m && nearby.count <= kNearbyMax;
     if (d2 < best || (d2 == best && r.order < found.order)) {
       best = d2;
       found = r;
-      nearby.nearest = listed ? nearby.count : -1;
     }
     if (d2 <= kNearby_m * kNearby_m) {
-      if (listed)
-        nearby.near[static_cast<std::size_t>(nearby.count)] = Near{r, point.cast<float>(), d2};
+      if (nearby.count <= kNearbyMax) {
+        nearby.near[static_cast<std::size_t>(nearby.count)] = r;
+        nearby.near_points[static_cast<std::size_t>(nearby.count)] = point.cast<float>();
+      }
       ++nearby.count;
     }
   };
   const auto walk_list = [&]() {
     nearby.origin = q;
     nearby.count = 0;
-    nearby.nearest = -1;
     for (std::int32_t k = listed_[i].begin; k < listed_[i].end; ++k) {
       const Candidate& c = candidates_[static_cast<std::size_t>(k)];
       take(c.point, c.reference);
@@ -445,7 +444,6 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
   };
   nearby.origin = q;
   nearby.count = 0;
-  nearby.nearest = -1;
   bool any = false;
   each_candidate(near_x0, near_x1, near_y0, near_y1,
                  [&](const Eigen::Vector2d& point, const Reference& r) {
@@ -537,29 +535,14 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
           nearby.nearest_m + (q - nearby.at).norm() + (q - nearby.origin).norm() +
                   kDistanceMargin_m <=
               kNearby_m) {
-        // The nearest of them (the first of equals in their order), the last nearest tried first:
-        // one farther from the origin than the nearest so far is from the point, by more than the
-        // point is from the origin, is not looked at.
-        const double moved = (q - nearby.origin).norm();
-        double limit2 = kInfinity;
-        std::int32_t nearest = -1;
-        const auto consider = [&](std::int32_t k) {
-          const Near& near = nearby.near[static_cast<std::size_t>(k)];
-          if (near.from_origin2 > limit2) return;
-          const double d2 = (near.point.cast<double>() - q).squaredNorm();
-          if (d2 < best || (d2 == best && near.reference.order < found.order)) {
-            best = d2;
-            found = near.reference;
-            nearest = k;
-            const double reach = moved + std::sqrt(best) + kDistanceMargin_m;
-            limit2 = reach * reach;
-          }
-        };
-        if (nearby.nearest >= 0) consider(nearby.nearest);
         for (std::int32_t k = 0; k < nearby.count; ++k) {
-          if (k != nearby.nearest) consider(k);
+          const auto at = static_cast<std::size_t>(k);
+          const double d2 = (nearby.near_points[at].cast<double>() - q).squaredNorm();
+          if (d2 < best || (d2 == best && nearby.near[at].order < found.order)) {
+            best = d2;
+            found = nearby.near[at];
+          }
         }
-        nearby.nearest = nearest;
       } else if (nearest_candidate(i, q, threshold, iteration == 0 && structure_only_, best,
                                    found)) {
         ++covered;

@@ -304,9 +304,12 @@ class DynamicFilter {
   void forget_lost_tracks();
   Track new_track(const Observation& obs, double stamp_s, std::int32_t object_index);
   // Step 7.
-  BeamLabel beam_label(const LaserScan& scan, std::size_t b, std::int32_t segment_label,
-                       bool learned);
-  bool near_dynamic_track(const Eigen::Vector2d& point_m, double stamp_s) const;
+  BeamLabel beam_label(std::size_t b, std::int32_t segment_label, bool learned);
+  /// The outlines (edge to edge) of the tracks moving now, predicted to @p stamp_s, into
+  /// moving_outlines_: once per scan for the registration, once for the labels.
+  void predict_moving_outlines(double stamp_s);
+  /// Whether a point lies within fragment_distance_m of one of moving_outlines_.
+  bool near_dynamic_track(const Eigen::Vector2d& point_m) const;
   void follow_fragments(const LaserScan& scan, const Segmentation& segmentation,
                         const Pose2& sensor_pose);
   void remove_edge_pixels(const LaserScan& scan, FilterResult& out);
@@ -350,7 +353,14 @@ class DynamicFilter {
   std::vector<std::int32_t> points_in_free_;  // and those found.
   std::vector<char> keep_;                    // Scratch: beams the map learns.
   std::vector<std::size_t> edge_pixels_;      // Scratch: remove_edge_pixels().
-  std::optional<Pose2> previous_input_pose_;  // The pose given with the previous scan.
+  struct PredictedOutline {  // A track's outline (edge to edge), predicted dt after it was seen.
+    PredictedOutline(const PointVelocityFilter& first, const PointVelocityFilter& last, double dt);
+    double distance(const Eigen::Vector2d& p) const;
+    Eigen::Vector2d a, ab;  // The segment from a to a + ab.
+    double len2;
+  };
+  std::vector<PredictedOutline> moving_outlines_;  // predict_moving_outlines().
+  std::optional<Pose2> previous_input_pose_;       // The pose given with the previous scan.
   std::uint64_t next_id_ = 1;
   bool have_previous_ = false;
   double previous_stamp_s_ = 0.0;

@@ -322,24 +322,19 @@ class ScanRegistration {
   std::vector<Listed> listed_;
   std::uint32_t cache_generation_ = 0;
   // Each sample point's candidates within kNearby_m of where it was when all its candidates were
-  // last looked at (origin; in their order; count -1: more than fit), which of them was its
-  // nearest at the last iteration (-1: none of them), and that one's distance. While that
-  // distance plus how far the point moved since stays within kNearby_m, its nearest is one of
-  // these (the others are farther).
+  // last looked at (in their order; count -1: more than fit), and its nearest candidate's
+  // distance at the last iteration. While that distance plus how far the point moved since
+  // stays within kNearby_m, its nearest is one of these (the others are farther).
   static constexpr double kNearby_m = 0.2;
   static constexpr std::int32_t kNearbyMax = 31;
-  struct Near {
-    Reference reference;
-    Eigen::Vector2f point;  // The map's, kept here: the later iterations read them in one place.
-    double from_origin2;    // Squared distance from the origin.
-  };
   struct Nearby {
     Eigen::Vector2d origin;
     Eigen::Vector2d at;
     double nearest_m = 0.0;
-    std::int32_t nearest = -1;
     std::int32_t count = -1;
-    std::array<Near, kNearbyMax + 1> near{};
+    std::array<Reference, kNearbyMax + 1> near{};
+    // Their points (the map's), kept here: the later iterations read them from one place.
+    std::array<Eigen::Vector2f, kNearbyMax + 1> near_points;
   };
   std::vector<Nearby> nearby_;
   // explained(): the map points that can explain points of one voxel, kept for the next beam.

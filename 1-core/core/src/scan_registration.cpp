@@ -33,6 +33,7 @@ std::int64_t floor_int(double v) {
   const auto i = static_cast<std::int64_t>(v);
   return static_cast<double>(i) > v ? i - 1 : i;
 }
+
 // Range at which an angular error is turned into metres for the adaptive threshold.
 constexpr double kThresholdRange_m = 10.0;
 // Sensor motion below which a scan says nothing about the seed's error.

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "dispel/core/floor_index.hpp"
 #include "dispel/core/invalid_field.hpp"
 
 namespace dispel {
@@ -99,12 +100,9 @@ inline bool FreeSpaceMap::cell_of(const Eigen::Vector2d& p, std::int64_t& ix,
         std::abs(fy - static_cast<double>(sensor_ty_ * kTileSide)) <= reach)) {
     return false;
   }
-  // Rounded down without a call into libm (this runs for every beam and every cell asked about):
-  // truncation, then one less for a negative value that was not whole.
-  ix = static_cast<std::int64_t>(fx);
-  iy = static_cast<std::int64_t>(fy);
-  ix -= static_cast<double>(ix) > fx ? 1 : 0;
-  iy -= static_cast<double>(iy) > fy ? 1 : 0;
+  // Rounded down without a call into libm (this runs for every beam and every cell asked about).
+  ix = floor_index(fx);
+  iy = floor_index(fy);
   return tile_within_reach(ix >> kTileBits, iy >> kTileBits);
 }
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "dispel/core/floor_index.hpp"
 #include "dispel/core/invalid_field.hpp"
 
 namespace dispel {
@@ -25,14 +26,6 @@ Pose2 scaled(const Pose2& per_s, double dt) {
   return {per_s.x_m * dt, per_s.y_m * dt, per_s.yaw_rad * dt};
 }
 Eigen::Vector2d perp(const Eigen::Vector2d& v) { return {-v.y(), v.x()}; }
-
-// std::floor(v) as an integer for a finite @p v, without a call into libm (the voxel of every
-// point asked about, many times a scan): truncation, then one less for a negative value that was
-// not whole.
-std::int64_t floor_int(double v) {
-  const auto i = static_cast<std::int64_t>(v);
-  return static_cast<double>(i) > v ? i - 1 : i;
-}
 
 // Range at which an angular error is turned into metres for the adaptive threshold.
 constexpr double kThresholdRange_m = 10.0;
@@ -177,7 +170,8 @@ void ScanRegistration::hold_guess_sideways() {
 }
 
 inline ScanRegistration::Key ScanRegistration::key_of(const Eigen::Vector2d& p) const {
-  return key_at(floor_int(p.x() / config_.voxel_size_m), floor_int(p.y() / config_.voxel_size_m));
+  return key_at(floor_index(p.x() / config_.voxel_size_m),
+                floor_index(p.y() / config_.voxel_size_m));
 }
 
 inline bool ScanRegistration::structure(const Voxel& v) const {
@@ -190,8 +184,8 @@ bool ScanRegistration::explained(std::size_t b) const {
   if (b >= world_points_.size()) return false;
   const Eigen::Vector2d& p = world_points_[b];
   if (!std::isfinite(p.x())) return false;
-  const auto ix = floor_int(p.x() / config_.voxel_size_m);
-  const auto iy = floor_int(p.y() / config_.voxel_size_m);
+  const auto ix = floor_index(p.x() / config_.voxel_size_m);
+  const auto iy = floor_index(p.y() / config_.voxel_size_m);
   // The points around it that can explain it, found once for consecutive beams in the same voxel
   // (until the next registration or add()).
   if (!explaining_valid_ || ix != explaining_ix_ || iy != explaining_iy_) {
@@ -327,8 +321,8 @@ Eigen::Vector2d ScanRegistration::map_normal(const Voxel& voxel, std::uint8_t sl
     const Eigen::Vector2d m = v.points[slot].cast<double>();
     const double size = config_.voxel_size_m;
     const auto reach = static_cast<std::int64_t>(std::ceil(kMapNormalRadius_m / size));
-    const auto mx = floor_int(m.x() / size);
-    const auto my = floor_int(m.y() / size);
+    const auto mx = floor_index(m.x() / size);
+    const auto my = floor_index(m.y() / size);
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
     Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
     int count = 0;
@@ -389,8 +383,8 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
                                          bool need_any, double& best, Reference& found) {
   const Eigen::Vector2d& at_seed = seed_points_[i];
   const double size = config_.voxel_size_m;
-  const auto sx = floor_int(at_seed.x() / size);
-  const auto sy = floor_int(at_seed.y() / size);
+  const auto sx = floor_index(at_seed.x() / size);
+  const auto sy = floor_index(at_seed.y() / size);
   const double radius2 = radius_ * radius_;
   const std::int64_t side = 2 * reach_ + 1;
   Nearby& nearby = nearby_[i];
@@ -422,7 +416,7 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
   // The voxels within kNearby_m of q along each axis (a stored point may lie a float's rounding
   // outside its voxel: a margin), within the seed's reach.
   constexpr double kMargin_m = 1e-4;
-  const auto cell = [&](double v) { return floor_int(v / size); };
+  const auto cell = [&](double v) { return floor_index(v / size); };
   const std::int64_t near_x0 = std::max(sx - reach_, cell(q.x() - kNearby_m - kMargin_m));
   const std::int64_t near_x1 = std::min(sx + reach_, cell(q.x() + kNearby_m + kMargin_m));
   const std::int64_t near_y0 = std::max(sy - reach_, cell(q.y() - kNearby_m - kMargin_m));

@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -190,21 +191,24 @@ bool ScanRegistration::explained(std::size_t b) const {
   // (until the next registration or add()).
   if (!explaining_valid_ || ix != explaining_ix_ || iy != explaining_iy_) {
     explaining_.clear();
-    for (std::int64_t x = ix - 1; x <= ix + 1; ++x) {
-      for (std::int64_t y = iy - 1; y <= iy + 1; ++y) {
-        const Voxel* v = map_.find(key_at(x, y));
-        // Structure explains only while it is still seen: someone who stood there and left
-        // explains no one who comes by later.
-        if (v == nullptr || !structure(*v) ||
-            last_stamp_s_ - v->last_stamp_s > config_.explained_max_age_s) {
-          continue;
-        }
-        const double min_age =
-            v->in_free_space ? config_.explained_min_span_in_free_s : config_.explained_min_span_s;
-        for (std::uint8_t i = 0; i < v->count; ++i) {
-          if (last_stamp_s_ - v->stamps_s[i] >= min_age) {
-            explaining_.push_back(v->points[i].cast<double>());
-          }
+    // The point's own voxel first: a beam is mostly explained by a point there (the answer does
+    // not depend on the order, the time to find it does).
+    constexpr std::array<std::int8_t, 9> kDx{0, -1, -1, -1, 0, 0, 1, 1, 1};
+    constexpr std::array<std::int8_t, 9> kDy{0, -1, 0, 1, -1, 1, -1, 0, 1};
+    for (std::size_t k = 0; k < kDx.size(); ++k) {
+      const std::int64_t x = ix + kDx[k], y = iy + kDy[k];
+      const Voxel* v = map_.find(key_at(x, y));
+      // Structure explains only while it is still seen: someone who stood there and left
+      // explains no one who comes by later.
+      if (v == nullptr || !structure(*v) ||
+          last_stamp_s_ - v->last_stamp_s > config_.explained_max_age_s) {
+        continue;
+      }
+      const double min_age =
+          v->in_free_space ? config_.explained_min_span_in_free_s : config_.explained_min_span_s;
+      for (std::uint8_t i = 0; i < v->count; ++i) {
+        if (last_stamp_s_ - v->stamps_s[i] >= min_age) {
+          explaining_.push_back(v->points[i].cast<double>());
         }
       }
     }
@@ -407,7 +411,7 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
     nearby.count = 0;
     for (std::int32_t k = listed_[i].begin; k < listed_[i].end; ++k) {
       const Candidate& c = candidates_[static_cast<std::size_t>(k)];
-      take(c.point, c.reference);
+      take(c.point.cast<double>(), c.reference);
     }
     if (nearby.count > kNearbyMax) nearby.count = -1;
     return listed_[i].end > listed_[i].begin;
@@ -437,23 +441,25 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
       }
     }
   };
-  nearby.origin = q;
-  nearby.count = 0;
-  bool any = false;
-  each_candidate(near_x0, near_x1, near_y0, near_y1,
-                 [&](const Eigen::Vector2d& point, const Reference& r) {
-                   any = true;
-                   take(point, r);
-                 });
-  if (best <= kNearby_m * kNearby_m || (threshold <= kNearby_m && !need_any)) {
-    if (nearby.count > kNearbyMax) nearby.count = -1;
-    return any;
+  if (!exhaustive_) {
+    nearby.origin = q;
+    nearby.count = 0;
+    bool any = false;
+    each_candidate(near_x0, near_x1, near_y0, near_y1,
+                   [&](const Eigen::Vector2d& point, const Reference& r) {
+                     any = true;
+                     take(point, r);
+                   });
+    if (best <= kNearby_m * kNearby_m || (threshold <= kNearby_m && !need_any)) {
+      if (nearby.count > kNearbyMax) nearby.count = -1;
+      return any;
+    }
   }
   // All of its candidates, listed in their order.
   listed_[i].begin = static_cast<std::int32_t>(candidates_.size());
   each_candidate(sx - reach_, sx + reach_, sy - reach_, sy + reach_,
                  [&](const Eigen::Vector2d& point, const Reference& r) {
-                   candidates_.push_back(Candidate{point, r});
+                   candidates_.push_back(Candidate{point.cast<float>(), r});
                  });
   listed_[i].end = static_cast<std::int32_t>(candidates_.size());
   best = kInfinity;
@@ -526,27 +532,41 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
       Nearby& nearby = nearby_[i];
       double best = kInfinity;
       Reference found{nullptr, 0, std::numeric_limits<std::int32_t>::max()};
-      if (iteration > 0 && nearby.count >= 0 &&
-          nearby.nearest_m + (q - nearby.at).norm() + (q - nearby.origin).norm() +
-                  kDistanceMargin_m <=
-              kNearby_m) {
+      Eigen::Vector2d found_point;
+      const double moved = iteration > 0 ? (q - nearby.at).norm() : 0.0;
+      if (iteration > 0 && listed_[i].begin >= 0 && !exhaustive_ &&
+          nearby.nearest_m - moved >= threshold + kDistanceMargin_m) {
+        // Its nearest candidate was this far from where it was (all its candidates are listed:
+        // the distance is exact), and it has not moved enough to come within the threshold.
+        continue;
+      }
+      if (iteration > 0 && nearby.count >= 0 && !exhaustive_ &&
+          nearby.nearest_m + moved + (q - nearby.origin).norm() + kDistanceMargin_m <= kNearby_m) {
+        // The list is in the candidates' order: the first of equals is the first found.
+        std::int32_t nearest = -1;
         for (std::int32_t k = 0; k < nearby.count; ++k) {
-          const auto at = static_cast<std::size_t>(k);
-          const double d2 = (nearby.near_points[at].cast<double>() - q).squaredNorm();
-          if (d2 < best || (d2 == best && nearby.near[at].order < found.order)) {
+          const double d2 =
+              (nearby.near_points[static_cast<std::size_t>(k)].cast<double>() - q).squaredNorm();
+          if (d2 < best) {
             best = d2;
-            found = nearby.near[at];
+            nearest = k;
           }
         }
-      } else if (nearest_candidate(i, q, threshold, iteration == 0 && structure_only_, best,
-                                   found)) {
-        ++covered;
+        if (nearest >= 0) {
+          found = nearby.near[static_cast<std::size_t>(nearest)];
+          found_point = nearby.near_points[static_cast<std::size_t>(nearest)].cast<double>();
+        }
+      } else {
+        if (nearest_candidate(i, q, threshold, iteration == 0 && structure_only_, best, found)) {
+          ++covered;
+        }
+        if (found.voxel != nullptr) found_point = found.voxel->points[found.slot].cast<double>();
       }
       nearby.at = q;
       nearby.nearest_m = std::sqrt(best);
       if (!(best < threshold2)) continue;
       ++inliers;
-      const Eigen::Vector2d diff = q - found.voxel->points[found.slot].cast<double>();
+      const Eigen::Vector2d diff = q - found_point;
       Eigen::Vector2d normal = found.voxel->normals[found.slot].cast<double>();
       if (map_normals_) {
         // With odometry, a map point without a normal from its scan gets one from the map:

@@ -188,6 +188,47 @@ TEST(ScanRegistration, DrivingAlongRoughCorridorsBeatsTheWheelOdometry) {
       laser_only.final_m);
 }
 
+// The nearest map point of each sample point is found through shortcuts: from the second
+// iteration on, among a short list of the candidates near where the point was (while it cannot
+// have a nearer one elsewhere), and not at all for a point that stays farther from every
+// candidate than the threshold. They must change nothing: every pose and report, seeded by the
+// wheel odometry and laser-only, is the same bit for bit as with every candidate walked at every
+// iteration (ScanRegistration::search_exhaustively).
+TEST(ScanRegistration, TheNearestSearchsShortcutsChangeNoPose) {
+  const sim::Scenario s = office_loop(20.0);
+  const sim::SimulationOutput out = sim::simulate(s, 2);
+  PoseBuffer odometry;
+  for (const sim::SensorSample& m : out.sensors) odometry.add(m.stamp_s, m.odom_pose);
+  for (const bool with_odometry : {true, false}) {
+    ScanRegistration fast{RegistrationConfig{}}, exhaustive{RegistrationConfig{}};
+    exhaustive.search_exhaustively(true);
+    int iterations = 0, compared = 0;
+    for (const sim::ScanFrame& f : out.scans) {
+      std::optional<Pose2> odom;
+      if (with_odometry) {
+        Pose2 at;
+        ASSERT_TRUE(odometry.lookup(f.scan.stamp_s, at) == PoseLookup::kOk);
+        odom = at * s.robot.laser_mount;
+      }
+      RegistrationReport a, b;
+      const Pose2 pa = fast.register_scan(f.scan, odom, a);
+      const Pose2 pb = exhaustive.register_scan(f.scan, odom, b);
+      ASSERT_EQ(pa.x_m, pb.x_m) << "scan " << compared << " odometry " << with_odometry;
+      ASSERT_EQ(pa.y_m, pb.y_m) << "scan " << compared;
+      ASSERT_EQ(pa.yaw_rad, pb.yaw_rad) << "scan " << compared;
+      ASSERT_EQ(a.inlier_share, b.inlier_share) << "scan " << compared;
+      ASSERT_EQ(a.residual_m, b.residual_m) << "scan " << compared;
+      ASSERT_EQ(a.total_iterations, b.total_iterations) << "scan " << compared;
+      iterations += a.total_iterations;
+      ++compared;
+      fast.add(std::vector<char>(f.scan.size(), 1), {});
+      exhaustive.add(std::vector<char>(f.scan.size(), 1), {});
+    }
+    EXPECT_GT(compared, 140);
+    EXPECT_GT(iterations, 2 * compared);  // The later iterations, where the shortcuts are, ran.
+  }
+}
+
 // A wheel that slips: the odometry turns 10 degrees in each of four scans (40 degrees in half a
 // second) while the robot drives straight on, then goes on from that heading (the simulator's
 // slips at 1.5 m/s turned it 27 degrees: a warehouse run whose map turned by 17 degrees with the

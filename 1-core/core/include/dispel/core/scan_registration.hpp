@@ -199,6 +199,10 @@ class ScanRegistration {
   /// along it), as learnt so far (0 before any scan registered: the x axis).
   double learnt_heading_rad() const;
   const RegistrationConfig& config() const { return config_; }
+  /// For tests: each sample point's nearest map point found by walking all its candidates at
+  /// every iteration, without the shortcuts that must not change it (the nearby lists, the
+  /// bound that passes over points too far from every candidate). Slow.
+  void search_exhaustively(bool on) { exhaustive_ = on; }
 
  private:
   static inline const Eigen::Vector2f kZero = Eigen::Vector2f::Zero();
@@ -309,9 +313,10 @@ class ScanRegistration {
   int reach_ = 0;
   double radius_ = 0.0;
   bool structure_only_ = true;
+  bool exhaustive_ = false;  // search_exhaustively().
   std::vector<CacheSlot> cache_;
   struct Candidate {
-    Eigen::Vector2d point;
+    Eigen::Vector2f point;  // The map's, as stored.
     Reference reference;
   };
   struct Listed {  // A sample point's candidates in candidates_ (begin -1: not listed).
@@ -332,9 +337,10 @@ class ScanRegistration {
     Eigen::Vector2d at;
     double nearest_m = 0.0;
     std::int32_t count = -1;
-    std::array<Reference, kNearbyMax + 1> near{};
-    // Their points (the map's), kept here: the later iterations read them from one place.
+    // Their points (the map's), kept here: the later iterations read them from one place (the
+    // first few in the same cache line as the above).
     std::array<Eigen::Vector2f, kNearbyMax + 1> near_points;
+    std::array<Reference, kNearbyMax + 1> near{};
   };
   std::vector<Nearby> nearby_;
   // explained(): the map points that can explain points of one voxel, kept for the next beam.

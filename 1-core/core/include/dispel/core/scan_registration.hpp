@@ -337,8 +337,8 @@ class ScanRegistration {
     Eigen::Vector2d at;
     double nearest_m = 0.0;
     std::int32_t count = -1;
-    // Their points (the map's), kept here: the later iterations read them from one place (the
-    // first few in the same cache line as the above).
+    // Their points (the map's), kept here: the later iterations read them from one place,
+    // right after the fields above (the references, read once per iteration, come after).
     std::array<Eigen::Vector2f, kNearbyMax + 1> near_points;
     std::array<Reference, kNearbyMax + 1> near{};
   };

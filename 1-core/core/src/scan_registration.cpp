@@ -390,11 +390,10 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
   const auto sx = floor_index(at_seed.x() / size);
   const auto sy = floor_index(at_seed.y() / size);
   const double radius2 = radius_ * radius_;
-  const std::int64_t side = 2 * reach_ + 1;
   Nearby& nearby = nearby_[i];
   const auto take = [&](const Eigen::Vector2d& point, const Reference& r) {
     const double d2 = (point - q).squaredNorm();
-    if (d2 < best || (d2 == best && r.order < found.order)) {
+    if (d2 < best) {  // Visited in their order: the first of equals stays.
       best = d2;
       found = r;
     }
@@ -432,11 +431,9 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
       for (std::int64_t y = y0; y <= y1; ++y) {
         const Voxel* v = candidate_voxel(x, y);
         if (v == nullptr) continue;
-        const auto order0 =
-            static_cast<std::int32_t>(((x - sx + reach_) * side + (y - sy + reach_)) * 4);
         for (std::uint8_t j = 0; j < v->count; ++j) {
           const Eigen::Vector2d point = v->points[j].cast<double>();
-          if ((point - at_seed).squaredNorm() <= radius2) f(point, Reference{v, j, order0 + j});
+          if ((point - at_seed).squaredNorm() <= radius2) f(point, Reference{v, j});
         }
       }
     }
@@ -463,7 +460,7 @@ bool ScanRegistration::nearest_candidate(std::size_t i, const Eigen::Vector2d& q
                  });
   listed_[i].end = static_cast<std::int32_t>(candidates_.size());
   best = kInfinity;
-  found = Reference{nullptr, 0, std::numeric_limits<std::int32_t>::max()};
+  found = Reference{nullptr, 0};
   return walk_list();
 }
 
@@ -531,7 +528,7 @@ Pose2 ScanRegistration::align(const Pose2& seed, const Pose2& delta, double thre
       // among all of them otherwise, finding the nearby ones around where the point is now.
       Nearby& nearby = nearby_[i];
       double best = kInfinity;
-      Reference found{nullptr, 0, std::numeric_limits<std::int32_t>::max()};
+      Reference found{nullptr, 0};
       Eigen::Vector2d found_point;
       const double moved = iteration > 0 ? (q - nearby.at).norm() : 0.0;
       if (iteration > 0 && listed_[i].begin >= 0 && !exhaustive_ &&

@@ -234,10 +234,9 @@ class ScanRegistration {
   }
   Key key_of(const Eigen::Vector2d& p) const;
   bool structure(const Voxel& v) const;
-  struct Reference {  // One map point: its voxel, its slot there, its place among candidates.
+  struct Reference {  // One map point: its voxel, its slot there.
     const Voxel* voxel;
     std::uint8_t slot;
-    std::int32_t order;
   };
   // Voxel (x, y) of the map if it can hold candidates (structure only or all, structure_only_),
   // else nullptr. The registration asks about the same voxels again and again: the answers are

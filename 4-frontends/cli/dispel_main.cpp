@@ -94,6 +94,62 @@ int main(int argc, char** argv) {
   };
   add_format_option(filter_cmd, filter_format);
 
+  dispel::apps::CleanCommandOptions clean;
+  std::string clean_config;
+  CLI::App* clean_cmd = app.add_subcommand(
+      "clean",
+      "Offline: remove from a whole recording everything that moved at any time, from the first "
+      "scan it was seen, and what stood and later left (writes <scan topic>_clean)");
+  clean_cmd
+      ->add_option("input", clean.job.filter.input,
+                   "IN: .bag, .mcap, .db3, a rosbag2 folder, .rawlog")
+      ->required();
+  clean_cmd->add_option("-o,--output", clean.job.filter.output, "OUT to write")->required();
+  clean_cmd->add_option("--config", clean_config,
+                        "YAML configuration of the online filter (see config/default.yaml)");
+  clean_cmd->add_option("--scan-topic", clean.job.filter.scan_topic, "LaserScan topic")
+      ->capture_default_str();
+  clean_cmd
+      ->add_option("--odom-topic", clean.job.filter.odom_topic,
+                   "Odometry topic; none: laser-only (also when the recording has none)")
+      ->capture_default_str();
+  clean_cmd->add_flag("--static-sensor", clean.job.filter.static_sensor,
+                      "The sensor does not move (no odometry needed)");
+  clean_cmd->add_flag("--scale-to-scanner", clean.job.filter.scale_to_scanner,
+                      "Carry N_min, L_d and L_s over from the thesis's scanner to this one");
+  clean_cmd->add_option("--stats", clean.stats_path,
+                        "Write statistics (and each object) as JSON here");
+  clean_cmd
+      ->add_option("--compression", clean.compression,
+                   "Output compression: bz2 or lz4 for a ROS 1 bag, zstd or lz4 for MCAP")
+      ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))
+      ->capture_default_str();
+  clean_cmd
+      ->add_option("--moving-scans", clean.job.clean.moving_min_scans,
+                   "An object moved when the online filter found it moving in this many scans...")
+      ->capture_default_str();
+  clean_cmd
+      ->add_option("--moving-travel", clean.job.clean.moving_min_travel_m,
+                   "...and it travelled this far (m)")
+      ->capture_default_str();
+  clean_cmd
+      ->add_option(
+          "--moved-from", clean.job.clean.moved_from_m,
+          "...and its beams in other scans are removed within this distance (m) of where it moved")
+      ->capture_default_str();
+  clean_cmd
+      ->add_option("--vacated-scans", clean.job.clean.vacated_min_scans,
+                   "A place was left when this many later scans saw through it; 0: off")
+      ->capture_default_str();
+  clean_cmd
+      ->add_option("--free-margin", clean.job.clean.free_margin_m,
+                   "A beam's last metres that do not count as seeing through")
+      ->capture_default_str();
+  clean_cmd->add_option("--cell-size", clean.job.clean.cell_size_m, "Cell side (m)")
+      ->capture_default_str();
+  std::string clean_format = "auto";
+  add_format_option(clean_cmd, clean_format);
+
   dispel::jobs::ConvertJobOptions convert;
   std::string convert_compression = "none";
   CLI::App* convert_cmd = app.add_subcommand(
@@ -255,6 +311,11 @@ int main(int argc, char** argv) {
       if (!config_path.empty()) filter.job.config_path = config_path;
       filter.job.format = dispel::jobs::recording_format_named(filter_format);
       return dispel::apps::run_filter(filter);
+    }
+    if (*clean_cmd) {
+      if (!clean_config.empty()) clean.job.filter.config_path = clean_config;
+      clean.job.filter.format = dispel::jobs::recording_format_named(clean_format);
+      return dispel::apps::run_clean(clean);
     }
     if (*sim_cmd) return dispel::apps::run_sim(sim);
     if (*convert_cmd) {

@@ -121,6 +121,55 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
   return j;
 }
 
+nlohmann::ordered_json clean_stats_json(const jobs::CleanJobOptions& o,
+                                        const jobs::CleanJobStats& s) {
+  nlohmann::ordered_json j;
+  j["input"] = o.filter.input;
+  j["output"] = o.filter.output;
+  j["format"] = s.input_format;
+  j["laser_only"] = s.laser_only;
+  j["messages_in"] = s.messages_in;
+  j["messages_out"] = s.messages_out;
+  j["messages_left_out"] = s.left_out;
+  const CleanCounts& c = s.counts;
+  j["scans"] = {{"total", s.scans}, {"with_pose", c.scans_with_pose}};
+  j["valid_beams"] = c.valid_beams;
+  j["beams_removed"] = {{"online", c.removed_online},
+                        {"moved_later", c.moved_later},
+                        {"vacated", c.vacated},
+                        {"total", c.removed_online + c.moved_later + c.vacated}};
+  j["beams_restored"] = c.restored;
+  j["online_beams_removed"] = {{"dynamic", s.online.beams_removed_dynamic},
+                               {"unknown", s.online.beams_removed_unknown}};
+  j["cells"] = c.cells;
+  j["vacated_episodes"] = c.vacated_episodes;
+  j["first_pass_s"] = s.first_pass_s;
+  j["second_pass_s"] = s.second_pass_s;
+  j["config"] = {{"cell_size_m", o.clean.cell_size_m},
+                 {"moving_min_scans", o.clean.moving_min_scans},
+                 {"moving_min_travel_m", o.clean.moving_min_travel_m},
+                 {"vacated_min_scans", o.clean.vacated_min_scans},
+                 {"free_margin_m", o.clean.free_margin_m},
+                 {"max_trace_range_m", o.clean.max_trace_range_m}};
+  nlohmann::ordered_json objects = nlohmann::ordered_json::array();
+  for (const CleanedObject& x : s.objects) {
+    if (x.dynamic_scans == 0 && x.beams_removed == 0) continue;  // Static throughout.
+    objects.push_back({{"track", x.track_id},
+                       {"first_seen_s", x.first_seen_s},
+                       {"last_seen_s", x.last_seen_s},
+                       {"scans", x.scans},
+                       {"dynamic_scans", x.dynamic_scans},
+                       {"first_dynamic_s", x.first_dynamic_s},
+                       {"last_dynamic_s", x.last_dynamic_s},
+                       {"travel_m", x.travel_m},
+                       {"moving", x.moving},
+                       {"beams", x.beams},
+                       {"beams_removed", x.beams_removed}});
+  }
+  j["objects"] = objects;
+  return j;
+}
+
 // A bar on stderr, redrawn only when the whole percent changes.
 class ProgressBar {
  public:
@@ -212,6 +261,47 @@ int run_filter(FilterCommandOptions options) {
     } catch (const std::exception& e) {
       std::cerr << "dispel filter: statistics not written: " << error_line(e.what()) << " ("
                 << options.job.output << " was written)\n";
+      return 1;
+    }
+  }
+  return 0;
+}
+
+int run_clean(CleanCommandOptions options) {
+  options.job.filter.compression = compression_named(options.compression);
+  jobs::CleanJobStats stats;
+  const int code = run_with_progress(
+      "clean", options.job.filter.output,
+      [&](const jobs::Progress& progress, const std::atomic<bool>* cancel) {
+        stats = jobs::run_clean_job(options.job, progress, cancel, [](const std::string& n) {
+          std::cerr << "dispel clean: " << error_line(n) << "\n";
+        });
+      });
+  if (code != 0) return code;
+  const CleanCounts& c = stats.counts;
+  std::int64_t moving = 0;
+  for (const CleanedObject& x : stats.objects) moving += x.moving ? 1 : 0;
+  std::printf(
+      "dispel clean: %lld scans, %lld valid beams; removed %lld (online %lld, moved at another "
+      "time %lld, left later %lld), %lld restored; %lld of %zu objects moved; %.2f s + %.2f s\n"
+      "wrote %s: %lld messages\n",
+      static_cast<long long>(stats.scans), static_cast<long long>(c.valid_beams),
+      static_cast<long long>(c.removed_online + c.moved_later + c.vacated),
+      static_cast<long long>(c.removed_online), static_cast<long long>(c.moved_later),
+      static_cast<long long>(c.vacated), static_cast<long long>(c.restored),
+      static_cast<long long>(moving), stats.objects.size(), stats.first_pass_s, stats.second_pass_s,
+      options.job.filter.output.c_str(), static_cast<long long>(stats.messages_out));
+  std::fflush(stdout);
+  if (!stats.left_out.empty()) {
+    std::cerr << "dispel clean: warning: " << jobs::left_out_summary(stats.left_out) << "\n";
+  }
+  if (!options.stats_path.empty()) {
+    try {
+      io::write_file_atomically(options.stats_path,
+                                clean_stats_json(options.job, stats).dump(2) + "\n");
+    } catch (const std::exception& e) {
+      std::cerr << "dispel clean: statistics not written: " << error_line(e.what()) << " ("
+                << options.job.filter.output << " was written)\n";
       return 1;
     }
   }

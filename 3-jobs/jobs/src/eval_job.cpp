@@ -3,6 +3,8 @@
 #include <cmath>
 #include <map>
 
+#include "dispel/core/offline_cleaner.hpp"
+
 namespace dispel::jobs {
 namespace {
 
@@ -58,8 +60,12 @@ eval::Rates evaluate_bags(const std::string& truth_bag, const std::string& resul
       if (a != actors.end() && a->second.scan.intensities.size() == n) {
         ids[i] = static_cast<std::int32_t>(a->second.scan.intensities[i]);
       }
-      removed[i] = from_labels ? (rs.intensities.size() == n &&
-                                  (rs.intensities[i] == 1.0F || rs.intensities[i] == 2.0F))
+      // Labels: BeamLabel (dispel filter) or CleanLabel (dispel clean), whose removed values
+      // include BeamLabel's (1 dynamic, 2 unknown).
+      removed[i] = from_labels ? (rs.intensities.size() == n && rs.intensities[i] >= 0.0F &&
+                                  rs.intensities[i] <= 7.0F &&
+                                  dispel::removed(static_cast<CleanLabel>(
+                                      static_cast<std::uint8_t>(rs.intensities[i]))))
                                : std::isnan(rs.ranges_m[i]) && !std::isnan(t.scan.ranges_m[i]);
     }
     evaluator.add_scan(stamp.seconds(), codes, ids, removed);

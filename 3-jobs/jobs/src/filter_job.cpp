@@ -16,12 +16,6 @@ namespace {
 
 using io::ends_with;
 
-DynamicFilterConfig base_config(const FilterJobOptions& o) {
-  if (o.config) return *o.config;
-  if (!o.config_path) return DynamicFilterConfig{};
-  return as_job([&] { return io::load_filter_config(*o.config_path); });
-}
-
 void check_period(const FilterJobOptions& o, const std::optional<double>& period,
                   const LaserScan& first) {
   if (o.scale_to_scanner && (!period || !(first.angle_increment_rad > 0.0))) {
@@ -36,7 +30,7 @@ void check_period(const FilterJobOptions& o, const std::optional<double>& period
 class ScanFilter {
  public:
   ScanFilter(const FilterJobOptions& o, FilterJobStats& stats)
-      : runner_({base_config(o), o.scale_to_scanner, 0.0}), stats_(stats) {}
+      : runner_({filter_config(o), o.scale_to_scanner, 0.0}), stats_(stats) {}
 
   // @p why: why @p pose is std::nullopt (counted as odometry_<why>).
   const FilterResult& process(const LaserScan& scan, double stated_period_s,
@@ -161,36 +155,9 @@ FilterJobStats run_recording(const FilterJobOptions& o, const Progress& progress
     throw JobError(o.input + ": already has " + filtered_topic + " or " + labels_topic +
                    "; filter the original recording");
   }
-  io::MotionQuery query;
-  query.scan_topic = o.scan_topic;
-  const DynamicFilterConfig config = base_config(o);
-  query.pose_topic = o.static_sensor ? std::nullopt : std::optional<std::string>(o.odom_topic);
-  query.laser_only = !o.static_sensor && o.odom_topic == "none";
-  query.laser_only_without_odometry = config.registration.enabled;
-  query.pose_tolerance_s = o.odom_tolerance_s;
-  query.missing_scan_hint = "; choose one with --scan-topic";
-  query.missing_pose_hint =
-      "; choose one with --odom-topic, or use --static-sensor for a sensor that does not move";
-  query.missing_mount_hint = "; record the sensor mount, or use --static-sensor";
-  const io::RecordingMotion motion =
-      as_job([&] { return io::read_motion(*in, query, [&] { check_cancelled(cancel); }); });
-  check_period(o, motion.scan_period_s, motion.first_scan);
+  const io::RecordingMotion motion = read_scan_motion(o, *in, cancel, notice);
   stats.odometry_refused = motion.poses_refused;
   stats.laser_only = motion.laser_only;
-  if (motion.laser_only) {
-    if (!config.registration.enabled) {
-      throw JobError(o.input +
-                     ": --odom-topic none needs the scan registration (registration.enabled: "
-                     "true; the thesis preset has it off)");
-    }
-    if (notice) {
-      notice(o.odom_topic == "none"
-                 ? "laser-only (--odom-topic none): each scan registered to the earlier ones"
-                 : o.input +
-                       " has no nav_msgs/Odometry topic: filtering laser-only, each scan "
-                       "registered to the earlier ones");
-    }
-  }
 
   ScanFilter filter(o, stats);
   const std::unique_ptr<io::RecordingWriter> out =
@@ -311,11 +278,50 @@ FilterJobStats run_carmen(const FilterJobOptions& o, const Progress& progress,
 
 }  // namespace
 
+DynamicFilterConfig filter_config(const FilterJobOptions& o) {
+  if (o.config) return *o.config;
+  if (!o.config_path) return DynamicFilterConfig{};
+  return as_job([&] { return io::load_filter_config(*o.config_path); });
+}
+
+io::RecordingMotion read_scan_motion(const FilterJobOptions& o, io::RecordingReader& in,
+                                     const std::atomic<bool>* cancel, const Notice& notice) {
+  io::MotionQuery query;
+  query.scan_topic = o.scan_topic;
+  const DynamicFilterConfig config = filter_config(o);
+  query.pose_topic = o.static_sensor ? std::nullopt : std::optional<std::string>(o.odom_topic);
+  query.laser_only = !o.static_sensor && o.odom_topic == "none";
+  query.laser_only_without_odometry = config.registration.enabled;
+  query.pose_tolerance_s = o.odom_tolerance_s;
+  query.missing_scan_hint = "; choose one with --scan-topic";
+  query.missing_pose_hint =
+      "; choose one with --odom-topic, or use --static-sensor for a sensor that does not move";
+  query.missing_mount_hint = "; record the sensor mount, or use --static-sensor";
+  io::RecordingMotion motion =
+      as_job([&] { return io::read_motion(in, query, [&] { check_cancelled(cancel); }); });
+  check_period(o, motion.scan_period_s, motion.first_scan);
+  if (motion.laser_only) {
+    if (!config.registration.enabled) {
+      throw JobError(o.input +
+                     ": --odom-topic none needs the scan registration (registration.enabled: "
+                     "true; the thesis preset has it off)");
+    }
+    if (notice) {
+      notice(o.odom_topic == "none"
+                 ? "laser-only (--odom-topic none): each scan registered to the earlier ones"
+                 : o.input +
+                       " has no nav_msgs/Odometry topic: filtering laser-only, each scan "
+                       "registered to the earlier ones");
+    }
+  }
+  return motion;
+}
+
 FilterJobStats run_filter_job(const FilterJobOptions& options, const Progress& progress,
                               const std::atomic<bool>* cancel, const Notice& notice) {
   check_input_file(options.input);
   if (options.output.empty()) throw JobError("no output file given (-o OUT.bag)");
-  if (options.config_path) base_config(options);  // Fail on a bad config before any reading.
+  if (options.config_path) filter_config(options);  // Fail on a bad config before any reading.
   if (ends_with(options.input, ".log") || ends_with(options.input, ".clf")) {
     return run_carmen(options, progress, cancel, notice);
   }

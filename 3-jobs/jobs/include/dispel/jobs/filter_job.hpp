@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "dispel/core/dynamic_filter.hpp"
+#include "dispel/io/recording_motion.hpp"
 #include "dispel/jobs/job.hpp"
 
 namespace dispel::jobs {
@@ -87,6 +88,16 @@ struct FilterJobStats {
 
 /// Told once, before the scans are filtered, something the user should know (laser-only).
 using Notice = std::function<void(const std::string&)>;
+
+/// The configuration @p o names (its config, else the file at config_path, else the defaults).
+/// @throws JobError for a file that cannot be read or holds a bad value
+DynamicFilterConfig filter_config(const FilterJobOptions& o);
+
+/// The road from a recording to the filter, shared by `dispel filter` and `dispel clean`: where
+/// the sensor was at each scan (odometry and mount, a static sensor, or laser-only), with the
+/// checks of --scale-to-scanner and laser-only, and the laser-only notice. @throws JobError
+io::RecordingMotion read_scan_motion(const FilterJobOptions& o, io::RecordingReader& in,
+                                     const std::atomic<bool>* cancel, const Notice& notice);
 
 /// Runs the job. The output appears only when complete (written to "<output>.partial" and
 /// renamed). @throws JobError, JobCancelled

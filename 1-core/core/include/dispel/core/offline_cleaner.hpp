@@ -1,0 +1,177 @@
+#pragma once
+/// @file
+/// The offline cleaner (`dispel clean`): a second look at a whole recording that the online filter
+/// has already been through. An online filter sees only the past: someone who stands still until
+/// after the recording's last scan of them is kept, and an object is removed only from the scan in
+/// which it is found moving. With every scan at hand the cleaner also removes
+/// - every beam of an object (a track of the online filter) that was found moving at any time,
+///   from the first scan in which it was seen (retroactive removal), and
+/// - the beams that hit space which later scans saw through, before anything hit it again (what
+///   stood there left),
+/// and keeps what the online filter took for moving only for a moment and never again (a wall
+/// piece whose outline slid for a scan or two). Both directions in time: what an object did later
+/// decides about its earlier beams, and what the scanner saw later decides about a place.
+///
+/// Beams are placed where they were measured: the sensor moves during a sweep (time_increment),
+/// at the pace it moved since the scan before.
+///
+/// Memory: per scan, its stamp, pose and motion, one byte per beam (the online label) and two per
+/// beam (the online object), and four bytes per object (its track); per track a summary (about 64
+/// bytes); per map cell hit by a beam about 48 bytes, plus 16 bytes per time it was vacated.
+
+#include <cstdint>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "dispel/core/dynamic_filter.hpp"
+#include "dispel/core/integer_key_map.hpp"
+#include "dispel/core/laser_scan.hpp"
+#include "dispel/core/pose2.hpp"
+
+namespace dispel {
+
+/// Parameters of the offline cleaner. Defaults are dispel's.
+struct CleanConfig {
+  /// Side of the cells in which the cleaner remembers where beams ended and what the scanner saw
+  /// through.
+  double cell_size_m = 0.1;
+  /// A track counts as moving when the online filter labelled it dynamic in at least this many
+  /// scans (a wall piece whose outline slid is dynamic for a scan or two).
+  int moving_min_scans = 3;
+  /// ... and its centroid moved at least this far (m) from where it was first seen.
+  double moving_min_travel_m = 0.5;
+  /// A moving track's object in a scan in which it was not found moving is removed only within
+  /// this distance (m) of where the track was found moving nearest in time: a track that took
+  /// over a piece of wall for a while does not take the wall with it.
+  double moved_from_m = 1.0;
+  /// A place hit by beams counts as vacated when, after its last hit, the scanner saw through it
+  /// in this many scans (none hit it in between): what stood there left. 0: off, the default:
+  /// on the simulated office at 1 m/s it took a quarter of the walls (docs/clean.md).
+  int vacated_min_scans = 0;
+  /// A beam's last this-many metres do not count as seeing through (range noise, mixed pixels,
+  /// walls seen at a grazing angle).
+  double free_margin_m = 0.3;
+  /// Beams are traced through the cells up to this range (m); beyond it they see nothing through.
+  double max_trace_range_m = 20.0;
+
+  /// Throws std::invalid_argument naming the first bad field.
+  void validate() const;
+};
+
+/// What the cleaner says of a beam (`<scan>_clean_labels`).
+enum class CleanLabel : std::uint8_t {
+  kStatic = 0,      ///< Kept: part of a static object.
+  kDynamic = 1,     ///< Removed: the online filter found it moving, and the cleaner agrees.
+  kUnknown = 2,     ///< Removed: the online filter's unknown (POG).
+  kNoObject = 3,    ///< Kept: in no object.
+  kInvalid = 4,     ///< No usable range: untouched.
+  kMovedLater = 5,  ///< Removed: its object moved at another time (retroactive removal).
+  kVacated = 6,     ///< Removed: the scanner later saw through where it ended (it left).
+  kRestored = 7,    ///< Kept: the online filter removed it, but its object never moved.
+};
+
+/// True for the labels whose beams are removed (NaN in `<scan>_clean`).
+inline bool removed(CleanLabel label) {
+  return label == CleanLabel::kDynamic || label == CleanLabel::kUnknown ||
+         label == CleanLabel::kMovedLater || label == CleanLabel::kVacated;
+}
+
+/// One object (an online track) over the recording: when it was seen, moving, and removed.
+struct CleanedObject {
+  std::uint64_t track_id = 0;
+  double first_seen_s = 0.0, last_seen_s = 0.0;
+  std::int32_t scans = 0;          ///< Scans in which it was seen.
+  std::int32_t dynamic_scans = 0;  ///< Of them, labelled dynamic by the online filter.
+  double first_dynamic_s = 0.0, last_dynamic_s = 0.0;  ///< When it was (0 when never).
+  double travel_m = 0.0;  ///< Largest distance of its centroid from where it was first seen.
+  bool moving = false;    ///< Counted as moving (CleanConfig): every beam of it removed.
+  std::int64_t beams = 0, beams_removed = 0;
+};
+
+/// Counts of the cleaner's labels over the recording.
+struct CleanCounts {
+  std::int64_t scans = 0, scans_with_pose = 0;
+  std::int64_t valid_beams = 0;
+  std::int64_t removed_online = 0;  ///< kDynamic + kUnknown.
+  std::int64_t moved_later = 0, vacated = 0, restored = 0;
+  std::int64_t cells = 0, vacated_episodes = 0;
+};
+
+/// Two passes over a recording: add() each scan with what the online filter made of it, in time
+/// order; then finish(); then label() each scan again, by its index in the order added.
+class OfflineCleaner {
+ public:
+  explicit OfflineCleaner(CleanConfig config);
+
+  /// Pass 1. @p result is the online filter's for @p scan (its sensor pose, labels, segmentation
+  /// and tracks); a scan passed through (no pose) is remembered with its labels only.
+  void add(const LaserScan& scan, const FilterResult& result);
+
+  /// After the last add(): decides which tracks moved.
+  void finish();
+
+  /// Pass 2: the labels of scan @p index (0-based, in the order added), given the same scan.
+  /// @throws std::out_of_range for an index never added, std::invalid_argument for a scan of
+  /// another size.
+  void label(std::size_t index, const LaserScan& scan, std::vector<CleanLabel>& out);
+
+  /// The objects, in the order they were first seen, with the beams removed by label() so far.
+  std::vector<CleanedObject> objects() const;
+  const CleanCounts& counts() const { return counts_; }
+  std::size_t scans() const { return scans_.size(); }
+  const CleanConfig& config() const { return config_; }
+
+ private:
+  struct ScanRecord {
+    double stamp_s = 0.0;
+    std::optional<Pose2> pose;
+    Pose2 motion_per_s;  // The sensor's since the scan before (its frame): for the de-skew.
+    double time_increment_s = 0.0;             // 0: the beams are not de-skewed.
+    std::vector<std::uint8_t> labels;          // BeamLabel per beam.
+    std::vector<std::uint16_t> object;         // Per beam: object index, kNone.
+    std::vector<std::uint32_t> track_of;       // Per object: index into tracks_, kNone32.
+    std::vector<Eigen::Vector2f> position_of;  // Per object: its track's position then.
+  };
+  struct Track {
+    CleanedObject object;
+    Eigen::Vector2d first_position = Eigen::Vector2d::Zero();
+    // Where it was when the online filter found it moving, in time order.
+    std::vector<std::pair<double, Eigen::Vector2f>> moving_at;
+  };
+  struct Episode {  // A cell hit from start to end, then seen through: vacated.
+    double start_s, end_s;
+    std::int32_t next;  // The cell's previous episode (-1: none).
+  };
+  struct Cell {
+    double start_s = 0.0;  // First hit since it was last vacated (NaN-free: see open).
+    double last_hit_s = 0.0;
+    std::uint32_t last_hit_scan = 0;
+    std::uint32_t last_free_scan = 0;
+    std::int32_t free_scans = 0;  // Scans that saw through it since its last hit.
+    bool open = false;            // Hit since it was last vacated.
+    std::int32_t episodes = -1;   // Its vacated episodes (a list in episodes_).
+  };
+  static constexpr std::uint16_t kNone = 0xFFFF;
+  static constexpr std::uint32_t kNone32 = 0xFFFFFFFFU;
+
+  std::uint64_t key_of(const Eigen::Vector2d& p) const;
+  // The sensor's pose when beam @p b of @p record's scan was measured.
+  static Pose2 beam_pose(const ScanRecord& record, std::size_t b);
+  void see_through(const Eigen::Vector2d& from, const Eigen::Vector2d& to, std::uint32_t scan);
+  bool vacated_at(const Eigen::Vector2d& p, double stamp_s) const;
+  bool near_where_it_moved(const Track& track, double stamp_s,
+                           const Eigen::Vector2f& position) const;
+
+  CleanConfig config_;
+  std::vector<ScanRecord> scans_;
+  std::vector<Track> tracks_;
+  std::unordered_map<std::uint64_t, std::uint32_t> track_index_;
+  IntegerKeyMap<Cell> cells_;
+  std::vector<Episode> episodes_;
+  BeamDirections directions_;
+  CleanCounts counts_;
+  bool finished_ = false;
+};
+
+}  // namespace dispel

@@ -1,0 +1,87 @@
+#include "dispel/core/offline_cleaner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace dispel {
+namespace {
+
+// A still scanner facing a wall 5 m away; for the first 20 scans a box stands 2 m in front of it
+// over beams 40-60, then it is gone and the scanner sees the wall there.
+LaserScan scan_at(int k) {
+  LaserScan s;
+  s.stamp_s = 100.0 + 0.1 * k;
+  s.angle_min_rad = -0.5;
+  s.angle_increment_rad = 0.01;
+  s.range_min_m = 0.1F;
+  s.range_max_m = 30.0F;
+  for (int b = 0; b < 101; ++b) {
+    const double bearing = s.angle_min_rad + s.angle_increment_rad * b;
+    const bool box = k < 20 && b >= 40 && b <= 60;
+    s.ranges_m.push_back(static_cast<float>((box ? 2.0 : 5.0) / std::cos(bearing)));
+  }
+  return s;
+}
+
+FilterResult all_static(const LaserScan& scan) {
+  FilterResult r;
+  r.labels.assign(scan.size(), BeamLabel::kNoObject);
+  r.sensor_pose = Pose2{};
+  return r;
+}
+
+TEST(OfflineCleaner, WhatStoodWhereTheScannerLaterSawThroughIsVacatedWhenAsked) {
+  for (const int vacated_scans : {0, 5}) {
+    CleanConfig config;
+    config.vacated_min_scans = vacated_scans;
+    OfflineCleaner cleaner(config);
+    for (int k = 0; k < 40; ++k) {
+      const LaserScan s = scan_at(k);
+      cleaner.add(s, all_static(s));
+    }
+    cleaner.finish();
+    std::vector<CleanLabel> labels;
+    for (int k = 0; k < 40; ++k) {
+      const LaserScan s = scan_at(k);
+      cleaner.label(static_cast<std::size_t>(k), s, labels);
+      for (int b = 0; b < 101; ++b) {
+        const bool box = k < 20 && b >= 42 && b <= 58;  // Its edges' cells: either way.
+        if (box) {
+          EXPECT_EQ(labels[b], vacated_scans > 0 ? CleanLabel::kVacated : CleanLabel::kNoObject)
+              << "scan " << k << " beam " << b;
+        } else if (b < 38 || b > 62) {
+          EXPECT_EQ(labels[b], CleanLabel::kNoObject) << "scan " << k << " beam " << b;
+        }
+      }
+    }
+    EXPECT_EQ(cleaner.counts().vacated > 0, vacated_scans > 0);
+  }
+}
+
+TEST(OfflineCleaner, BadParametersAndScansAreRefusedByName) {
+  CleanConfig config;
+  config.cell_size_m = 0.0;
+  EXPECT_THROW(
+      {
+        try {
+          OfflineCleaner c(config);
+        } catch (const std::invalid_argument& e) {
+          EXPECT_NE(std::string(e.what()).find("clean.cell_size_m"), std::string::npos);
+          throw;
+        }
+      },
+      std::invalid_argument);
+  OfflineCleaner cleaner{CleanConfig{}};
+  const LaserScan s = scan_at(0);
+  cleaner.add(s, all_static(s));
+  cleaner.finish();
+  std::vector<CleanLabel> labels;
+  LaserScan shorter = s;
+  shorter.ranges_m.pop_back();
+  EXPECT_THROW(cleaner.label(0, shorter, labels), std::invalid_argument);
+  EXPECT_THROW(cleaner.label(1, s, labels), std::out_of_range);
+}
+
+}  // namespace
+}  // namespace dispel

@@ -1,0 +1,121 @@
+#include "dispel/jobs/clean_job.hpp"
+
+#include <gtest/gtest.h>
+#include <sensor_msgs/LaserScan.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "bag_contents.hpp"
+#include "dispel/io/scenario_yaml.hpp"
+#include "dispel/jobs/eval_job.hpp"
+#include "dispel/jobs/sim_job.hpp"
+#include "test_files.hpp"
+
+namespace dispel::jobs {
+namespace {
+
+using test::read_bag;
+using test::source_path;
+using test::temp_path;
+
+// People who stand for 10-20 s and then walk off (config/scenarios/stand_then_leave.yaml, seed
+// 1), filtered online and cleaned offline: the cleaner removes far more of the people while they
+// stand (the online filter cannot know yet that they will walk) and keeps the walls. Measured:
+// still people removed 0.087 online, 0.345 clean; moving 0.597, 0.620; walls kept 1.0000, 0.9986.
+TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
+  const sim::Scenario scenario =
+      io::load_scenario(source_path("config/scenarios/stand_then_leave.yaml"));
+  const std::string sim_bag = temp_path("stand_then_leave.bag");
+  simulate_to_recording(scenario, 1, scenario.duration_s, sim_bag);
+
+  FilterJobOptions f;
+  f.input = sim_bag;
+  f.output = temp_path("stand_then_leave_filtered.bag");
+  f.scale_to_scanner = true;
+  run_filter_job(f);
+  CleanJobOptions c;
+  c.filter = f;
+  c.filter.output = temp_path("stand_then_leave_clean.bag");
+  const CleanJobStats stats = run_clean_job(c);
+  EXPECT_EQ(stats.scans, 347);
+  EXPECT_EQ(stats.counts.scans_with_pose, stats.scans);
+
+  const eval::Rates online = evaluate_bags(sim_bag, f.output);
+  const eval::Rates clean = evaluate_bags(sim_bag, c.filter.output, "/scan_clean");
+  EXPECT_GT(clean.still_beams, 5000);
+  EXPECT_GE(clean.still_removed_rate(), 0.30);
+  EXPECT_GE(clean.still_removed_rate(), 3.0 * online.still_removed_rate());
+  EXPECT_GE(clean.rejection_rate(), online.rejection_rate());
+  EXPECT_GE(clean.preservation_rate(), 0.998);
+
+  // Every scan has its cleaned copy and its labels; a beam is NaN exactly where it is removed.
+  const test::BagContents out = read_bag(c.filter.output);
+  const auto& scans = out.scans.at("/scan");
+  const auto& cleaned = out.scans.at("/scan_clean");
+  const auto& labels = out.scans.at("/scan_clean_labels");
+  ASSERT_EQ(cleaned.size(), scans.size());
+  ASSERT_EQ(labels.size(), scans.size());
+  std::int64_t removed_beams = 0;
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    ASSERT_EQ(cleaned[k].header.stamp, scans[k].header.stamp);
+    ASSERT_EQ(labels[k].intensities.size(), scans[k].ranges.size());
+    for (std::size_t b = 0; b < scans[k].ranges.size(); ++b) {
+      const auto label = static_cast<CleanLabel>(static_cast<int>(labels[k].intensities[b]));
+      const bool nan_now = std::isnan(cleaned[k].ranges[b]) && !std::isnan(scans[k].ranges[b]);
+      ASSERT_EQ(nan_now, removed(label)) << "scan " << k << " beam " << b;
+      removed_beams += removed(label) ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(removed_beams,
+            stats.counts.removed_online + stats.counts.moved_later + stats.counts.vacated);
+  // The objects it reports: those that moved, with when.
+  int moving = 0;
+  for (const CleanedObject& o : stats.objects) {
+    if (!o.moving) continue;
+    ++moving;
+    EXPECT_GE(o.dynamic_scans, c.clean.moving_min_scans);
+    EXPECT_LE(o.first_seen_s, o.first_dynamic_s);
+    EXPECT_LE(o.first_dynamic_s, o.last_dynamic_s);
+  }
+  EXPECT_GE(moving, 5);
+  for (const std::string& p : {sim_bag, f.output, c.filter.output}) std::remove(p.c_str());
+}
+
+// A real robot among no people (negative_2): every beam removed is a false removal. Cleaned:
+// left 0.19 %, right 0.12 %, rear 0.04 % of the valid beams (the online filter 0.19 / 0.13 /
+// 0.05 %; issue target 0.1 %, not reached on the left and right lasers).
+TEST(CleanJob, RealRobotWithoutPeopleKeepsItsWalls) {
+  for (const std::string laser : {"/left_scan", "/right_scan", "/rear_scan"}) {
+    CleanJobOptions c;
+    c.filter.input = source_path("data/leg_tracker/negative_2.bag");
+    c.filter.output = temp_path("negative_2_clean" + laser.substr(1) + ".bag");
+    c.filter.scan_topic = laser;
+    const CleanJobStats stats = run_clean_job(c);
+    EXPECT_TRUE(stats.laser_only);
+    EXPECT_GT(stats.counts.valid_beams, 200000);
+    const std::int64_t removed_beams =
+        stats.counts.removed_online + stats.counts.moved_later + stats.counts.vacated;
+    EXPECT_LE(static_cast<double>(removed_beams),
+              0.002 * static_cast<double>(stats.counts.valid_beams))
+        << laser;
+    std::remove(c.filter.output.c_str());
+  }
+}
+
+TEST(CleanJob, ACarmenLogIsAOneLineErrorAndWritesNothing) {
+  CleanJobOptions c;
+  c.filter.input = source_path("data/carmen/leg_tracker_from0.log");
+  c.filter.output = temp_path("carmen_clean.bag");
+  try {
+    run_clean_job(c);
+    FAIL() << "a CARMEN log was cleaned";
+  } catch (const JobError& e) {
+    EXPECT_NE(std::string(e.what()).find("write the CARMEN log as a bag"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(test::exists(c.filter.output));
+}
+
+}  // namespace
+}  // namespace dispel::jobs

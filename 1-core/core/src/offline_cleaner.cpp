@@ -23,6 +23,8 @@ void CleanConfig::validate() const {
     reject_field("clean.moving_min_travel_m", moving_min_travel_m, "in [0, 100]");
   if (!(moved_from_m > 0.0 && moved_from_m <= 100.0))
     reject_field("clean.moved_from_m", moved_from_m, "in (0, 100]");
+  if (!(moved_max_width_m > 0.0 && moved_max_width_m <= 100.0))
+    reject_field("clean.moved_max_width_m", moved_max_width_m, "in (0, 100]");
   if (vacated_min_scans < 0 || vacated_min_scans > 10000)
     reject_field("clean.vacated_min_scans", vacated_min_scans, "0 (off) or in [1, 10000]");
   if (!(free_margin_m >= 0.0 && free_margin_m <= 10.0))
@@ -107,6 +109,11 @@ void OfflineCleaner::add(const LaserScan& scan, const FilterResult& result) {
     }
     record.track_of.assign(seg.objects.size(), kNone32);
     record.position_of.assign(seg.objects.size(), Eigen::Vector2f::Zero());
+    record.width_of.resize(seg.objects.size());
+    for (std::size_t i = 0; i < seg.objects.size(); ++i) {
+      const double width = (seg.objects[i].last_point_m - seg.objects[i].first_point_m).norm();
+      record.width_of[i] = static_cast<std::uint8_t>(std::min(255.0, std::ceil(width / 0.02)));
+    }
     for (const TrackedObject& t : result.tracks) {
       if (t.object_index < 0 || static_cast<std::size_t>(t.object_index) >= seg.objects.size()) {
         continue;
@@ -258,6 +265,8 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
     // where it moved.
     const bool moved_later =
         moving && record.stamp_s <= t->object.last_dynamic_s &&
+        (online == BeamLabel::kDynamic ||
+         record.width_of[record.object[b]] * 0.02 <= config_.moved_max_width_m) &&
         near_where_it_moved(*t, record.stamp_s, record.position_of[record.object[b]]);
     const bool vacated =
         config_.vacated_min_scans > 0 && record.pose && scan.is_valid(b) &&

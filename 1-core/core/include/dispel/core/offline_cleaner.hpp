@@ -45,6 +45,9 @@ struct CleanConfig {
   /// this distance (m) of where the track was found moving nearest in time: a track that took
   /// over a piece of wall for a while does not take the wall with it.
   double moved_from_m = 1.0;
+  /// ... and only where its object is at most this wide (m): a person, two legs, a cart. A track
+  /// that ended on a walker passing a wall took the wall piece with it.
+  double moved_max_width_m = 1.5;
   /// A place hit by beams counts as vacated when, after its last hit, the scanner saw through it
   /// in this many scans (none hit it in between): what stood there left. 0: off, the default:
   /// on the simulated office at 1 m/s it took a quarter of the walls (docs/clean.md).
@@ -132,6 +135,7 @@ class OfflineCleaner {
     std::vector<std::uint16_t> object;         // Per beam: object index, kNone.
     std::vector<std::uint32_t> track_of;       // Per object: index into tracks_, kNone32.
     std::vector<Eigen::Vector2f> position_of;  // Per object: its track's position then.
+    std::vector<std::uint8_t> width_of;        // Per object: its width, in 2 cm (255: wider).
   };
   struct Track {
     CleanedObject object;

@@ -138,14 +138,21 @@ int main(int argc, char** argv) {
           "...and its beams in other scans are removed within this distance (m) of where it moved")
       ->capture_default_str();
   clean_cmd
-      ->add_option("--vacated-scans", clean.job.clean.vacated_min_scans,
-                   "A place was left when this many later scans saw through it; 0: off")
+      ->add_option("--through-scans", clean.job.clean.through_min_scans,
+                   "A small thing (or no object) is removed when this many scans saw through its "
+                   "place, 1-20 s later or earlier, before one hit it; 0: off")
+      ->capture_default_str();
+  clean_cmd
+      ->add_option("--through-horizon", clean.job.clean.through_horizon_s,
+                   "...within this many seconds of it")
       ->capture_default_str();
   clean_cmd
       ->add_option("--free-margin", clean.job.clean.free_margin_m,
-                   "A beam's last metres that do not count as seeing through")
+                   "Seeing through a place: returns from at least this far (m) beyond it")
       ->capture_default_str();
-  clean_cmd->add_option("--cell-size", clean.job.clean.cell_size_m, "Cell side (m)")
+  clean_cmd
+      ->add_option("--max-width", clean.job.clean.max_width_m,
+                   "The cleaner removes only objects at most this wide (m), and beams in no object")
       ->capture_default_str();
   std::string clean_format = "auto";
   add_format_option(clean_cmd, clean_format);

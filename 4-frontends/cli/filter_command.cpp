@@ -141,16 +141,17 @@ nlohmann::ordered_json clean_stats_json(const jobs::CleanJobOptions& o,
   j["beams_restored"] = c.restored;
   j["online_beams_removed"] = {{"dynamic", s.online.beams_removed_dynamic},
                                {"unknown", s.online.beams_removed_unknown}};
-  j["cells"] = c.cells;
-  j["vacated_episodes"] = c.vacated_episodes;
   j["first_pass_s"] = s.first_pass_s;
   j["second_pass_s"] = s.second_pass_s;
-  j["config"] = {{"cell_size_m", o.clean.cell_size_m},
-                 {"moving_min_scans", o.clean.moving_min_scans},
+  j["config"] = {{"moving_min_scans", o.clean.moving_min_scans},
                  {"moving_min_travel_m", o.clean.moving_min_travel_m},
-                 {"vacated_min_scans", o.clean.vacated_min_scans},
+                 {"moved_from_m", o.clean.moved_from_m},
+                 {"max_width_m", o.clean.max_width_m},
+                 {"through_min_scans", o.clean.through_min_scans},
+                 {"through_gap_s", o.clean.through_gap_s},
+                 {"through_horizon_s", o.clean.through_horizon_s},
                  {"free_margin_m", o.clean.free_margin_m},
-                 {"max_trace_range_m", o.clean.max_trace_range_m}};
+                 {"max_range_m", o.clean.max_range_m}};
   nlohmann::ordered_json objects = nlohmann::ordered_json::array();
   for (const CleanedObject& x : s.objects) {
     if (x.dynamic_scans == 0 && x.beams_removed == 0) continue;  // Static throughout.

@@ -1,6 +1,5 @@
-// The offline cleaner (offline_cleaner.hpp): pass 1 remembers each scan's online labels, objects
-// and tracks and, per cell, when beams ended there and whether later scans saw through it; pass 2
-// labels each beam with what the whole recording says of it.
+// The offline cleaner (offline_cleaner.hpp): pass 1 remembers each scan's online labels, objects,
+// tracks and ranges; pass 2 labels each beam with what the whole recording says of it.
 #include "dispel/core/offline_cleaner.hpp"
 
 #include <algorithm>
@@ -15,74 +14,27 @@
 namespace dispel {
 
 void CleanConfig::validate() const {
-  if (!(cell_size_m >= 0.02 && cell_size_m <= 2.0))
-    reject_field("clean.cell_size_m", cell_size_m, "in [0.02, 2]");
   if (moving_min_scans < 1 || moving_min_scans > 10000)
     reject_field("clean.moving_min_scans", moving_min_scans, "in [1, 10000]");
   if (!(moving_min_travel_m >= 0.0 && moving_min_travel_m <= 100.0))
     reject_field("clean.moving_min_travel_m", moving_min_travel_m, "in [0, 100]");
   if (!(moved_from_m > 0.0 && moved_from_m <= 100.0))
     reject_field("clean.moved_from_m", moved_from_m, "in (0, 100]");
-  if (!(moved_max_width_m > 0.0 && moved_max_width_m <= 100.0))
-    reject_field("clean.moved_max_width_m", moved_max_width_m, "in (0, 100]");
-  if (vacated_min_scans < 0 || vacated_min_scans > 10000)
-    reject_field("clean.vacated_min_scans", vacated_min_scans, "0 (off) or in [1, 10000]");
+  if (!(max_width_m > 0.0 && max_width_m <= 100.0))
+    reject_field("clean.max_width_m", max_width_m, "in (0, 100]");
+  if (through_min_scans < 0 || through_min_scans > 10000)
+    reject_field("clean.through_min_scans", through_min_scans, "0 (off) or in [1, 10000]");
+  if (!(through_gap_s >= 0.0 && through_gap_s <= 3600.0))
+    reject_field("clean.through_gap_s", through_gap_s, "in [0, 3600]");
+  if (!(through_horizon_s > through_gap_s && through_horizon_s <= 3600.0))
+    reject_field("clean.through_horizon_s", through_horizon_s, "in (through_gap_s, 3600]");
   if (!(free_margin_m >= 0.0 && free_margin_m <= 10.0))
     reject_field("clean.free_margin_m", free_margin_m, "in [0, 10]");
-  if (!(max_trace_range_m > 0.0 && max_trace_range_m <= 1000.0))
-    reject_field("clean.max_trace_range_m", max_trace_range_m, "in (0, 1000]");
+  if (!(max_range_m > 0.0 && max_range_m <= 1000.0))
+    reject_field("clean.max_range_m", max_range_m, "in (0, 1000]");
 }
 
 OfflineCleaner::OfflineCleaner(CleanConfig config) : config_((config.validate(), config)) {}
-
-std::uint64_t OfflineCleaner::key_of(const Eigen::Vector2d& p) const {
-  const auto ix = floor_index(p.x() / config_.cell_size_m);
-  const auto iy = floor_index(p.y() / config_.cell_size_m);
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(ix)) << 32U) |
-         static_cast<std::uint32_t>(iy);
-}
-
-// The cells a beam passed through from @p from to @p to (a grid traversal: every cell the segment
-// crosses, in order). A cell that beams ended in and that has not been hit since is seen through
-// once per scan; after vacated_min_scans scans it is vacated: its hits from the first to the last
-// become an episode of something that stood there and left.
-void OfflineCleaner::see_through(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
-                                 std::uint32_t scan) {
-  const double size = config_.cell_size_m;
-  std::int64_t x = floor_index(from.x() / size), y = floor_index(from.y() / size);
-  const std::int64_t x_end = floor_index(to.x() / size), y_end = floor_index(to.y() / size);
-  const Eigen::Vector2d d = to - from;
-  const int step_x = d.x() > 0.0 ? 1 : -1, step_y = d.y() > 0.0 ? 1 : -1;
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  const double delta_x = d.x() != 0.0 ? size / std::abs(d.x()) : kInf;
-  const double delta_y = d.y() != 0.0 ? size / std::abs(d.y()) : kInf;
-  const double next_x = static_cast<double>(x + (step_x > 0 ? 1 : 0)) * size;
-  const double next_y = static_cast<double>(y + (step_y > 0 ? 1 : 0)) * size;
-  double t_x = d.x() != 0.0 ? (next_x - from.x()) / d.x() : kInf;
-  double t_y = d.y() != 0.0 ? (next_y - from.y()) / d.y() : kInf;
-  const std::int64_t steps = std::abs(x_end - x) + std::abs(y_end - y);
-  for (std::int64_t k = 0; k <= steps; ++k) {
-    Cell* cell = cells_.find((static_cast<std::uint64_t>(static_cast<std::uint32_t>(x)) << 32U) |
-                             static_cast<std::uint32_t>(y));
-    if (cell != nullptr && cell->open && cell->last_free_scan != scan &&
-        cell->last_hit_scan != scan) {
-      cell->last_free_scan = scan;
-      if (++cell->free_scans >= config_.vacated_min_scans) {
-        episodes_.push_back(Episode{cell->start_s, cell->last_hit_s, cell->episodes});
-        cell->episodes = static_cast<std::int32_t>(episodes_.size() - 1);
-        cell->open = false;
-        ++counts_.vacated_episodes;
-      }
-    }
-    if (t_x < t_y) {
-      x += step_x;
-      t_x += delta_x;
-    } else {
-      y += step_y;
-      t_y += delta_y;
-    }
-  }
-}
 
 Pose2 OfflineCleaner::beam_pose(const ScanRecord& record, std::size_t b) {
   const double t = record.time_increment_s * static_cast<double>(b);
@@ -156,55 +108,20 @@ void OfflineCleaner::add(const LaserScan& scan, const FilterResult& result) {
       break;
     }
   }
-  const auto scan_no = static_cast<std::uint32_t>(scans_.size() + 1);  // 0: never.
   ++counts_.scans;
   if (record.pose) ++counts_.scans_with_pose;
-  for (std::size_t b = 0; b < n; ++b) counts_.valid_beams += scan.is_valid(b) ? 1 : 0;
-  if (record.pose && config_.vacated_min_scans > 0) {
-    const std::vector<Eigen::Vector2d>& unit = directions_.of(scan);
-    // What each beam saw through first, then where beams ended. A beam sees through up to
-    // free_margin_m before its end (or up to the range it would have measured when nothing
-    // returned); more before the end of a beam that meets its surface at a slant: near its end it
-    // runs beside that surface, through cells where the neighbouring beams end (a wall seen at
-    // 10 degrees is within a cell's width of the beam for the last 0.8 m).
-    const auto point = [&](std::size_t b) {
-      return static_cast<double>(scan.ranges_m[b]) * unit[b];
-    };
-    const double diagonal = config_.cell_size_m * std::sqrt(2.0);
-    for (std::size_t b = 0; b < n; ++b) {
-      const float r = scan.ranges_m[b];
-      const bool valid = scan.is_valid(b);
-      const bool nothing = !valid && (std::isinf(r) || r > scan.range_max_m) && !std::isnan(r);
-      if (!valid && !nothing) continue;
-      double margin = config_.free_margin_m;
-      if (valid && b > 0 && b + 1 < n && scan.is_valid(b - 1) && scan.is_valid(b + 1)) {
-        const Eigen::Vector2d along = point(b + 1) - point(b - 1);
-        const double length = along.norm();
-        if (length > 0.0 && length < 1.0) {
-          const double slant = std::abs(unit[b].x() * along.y() - unit[b].y() * along.x()) / length;
-          margin = std::max(margin, diagonal / std::max(slant, 1e-3));
-        }
-      }
-      const double reach =
-          std::min(valid ? static_cast<double>(r) - margin
-                         : std::min(static_cast<double>(scan.range_max_m), 1e9) - margin,
-                   config_.max_trace_range_m);
-      if (reach > 0.0) {
-        const Pose2 at = beam_pose(record, b);
-        see_through(at.translation(), PoseTransform(at)(reach * unit[b]), scan_no);
-      }
-    }
-    for (std::size_t b = 0; b < n; ++b) {
-      if (!scan.is_valid(b)) continue;
-      Cell& cell = cells_[key_of(PoseTransform(beam_pose(record, b))(point(b)))];
-      if (cell.last_hit_scan == scan_no) continue;
-      if (!cell.open) {
-        cell.open = true;
-        cell.start_s = scan.stamp_s;
-      }
-      cell.last_hit_s = scan.stamp_s;
-      cell.last_hit_scan = scan_no;
-      cell.free_scans = 0;
+  record.angle_min_rad = scan.angle_min_rad;
+  record.angle_increment_rad = scan.angle_increment_rad;
+  record.range_max_m = scan.range_max_m;
+  record.range_cm.resize(n);
+  for (std::size_t b = 0; b < n; ++b) {
+    const float r = scan.ranges_m[b];
+    if (scan.is_valid(b)) {
+      ++counts_.valid_beams;
+      record.range_cm[b] = static_cast<std::uint16_t>(std::min(65000.0F, std::round(r * 100.0F)));
+    } else {
+      record.range_cm[b] =
+          !std::isnan(r) && (std::isinf(r) || r > scan.range_max_m) ? kNoReturn : kUnusable;
     }
   }
   scans_.push_back(std::move(record));
@@ -216,7 +133,6 @@ void OfflineCleaner::finish() {
     t.object.moving = t.object.dynamic_scans >= config_.moving_min_scans &&
                       t.object.travel_m >= config_.moving_min_travel_m;
   }
-  counts_.cells = static_cast<std::int64_t>(cells_.size());
 }
 
 bool OfflineCleaner::near_where_it_moved(const Track& track, double stamp_s,
@@ -231,14 +147,121 @@ bool OfflineCleaner::near_where_it_moved(const Track& track, double stamp_s,
   return (later != at.end() && near(*later)) || (later != at.begin() && near(*(later - 1)));
 }
 
-bool OfflineCleaner::vacated_at(const Eigen::Vector2d& p, double stamp_s) const {
-  const Cell* cell = cells_.find(key_of(p));
-  if (cell == nullptr) return false;
-  for (std::int32_t e = cell->episodes; e >= 0; e = episodes_[static_cast<std::size_t>(e)].next) {
-    const Episode& episode = episodes_[static_cast<std::size_t>(e)];
-    if (episode.start_s <= stamp_s && stamp_s <= episode.end_s) return true;
+constexpr int kAttached_cm = 3;
+// Neighbouring beams in no object whose ranges differ by less than this are one run (one thing).
+constexpr float kRunGap_m = 0.3F;
+constexpr double kAttachedMotion_m = 0.05;
+constexpr double kAttachedTurn_rad = 0.02;
+
+// The beam of @p r's scan toward @p p (fixed frame): its index (not rounded into range), and @p p
+// in the sensor frame when that beam was measured (@p q). The sensor moves during the sweep: the
+// pose at the scan's stamp finds the beam, the pose at that beam's time places @p p.
+double OfflineCleaner::beam_toward(const ScanRecord& r, const Eigen::Vector2d& p,
+                                   Eigen::Vector2d& q) {
+  const auto index_of = [&](const Eigen::Vector2d& v) {
+    return std::round((std::atan2(v.y(), v.x()) - r.angle_min_rad) / r.angle_increment_rad);
+  };
+  q = PoseTransform(r.pose->inverse())(p);
+  double index = index_of(q);
+  if (r.time_increment_s > 0.0 && index >= 0.0 && index < static_cast<double>(r.range_cm.size())) {
+    q = PoseTransform(beam_pose(r, static_cast<std::size_t>(index)).inverse())(p);
+    index = index_of(q);
+  }
+  return index;
+}
+
+// The sine of the angle at which a beam must meet the surface beyond a place to see through it.
+constexpr double kMinSlant = 0.5;
+
+// Beams toward @p p and beside it returned from beyond it by free_margin_m, or nothing returned
+// within range_max: scan @p k saw through @p p. Out of its view (or beyond max_range_m), or a beam
+// there measured nothing usable: it did not.
+bool OfflineCleaner::sees_through(std::size_t k, const Eigen::Vector2d& p) const {
+  const ScanRecord& r = scans_[k];
+  if (!r.pose || !(r.angle_increment_rad > 0.0)) return false;
+  Eigen::Vector2d q;
+  const double index = beam_toward(r, p, q);
+  const double d = q.norm();
+  if (!(d < config_.max_range_m)) return false;
+  if (!(index >= 1.0 && index <= static_cast<double>(r.range_cm.size()) - 2.0)) return false;
+  const auto i = static_cast<std::size_t>(index);
+  for (std::size_t j = i - 1; j <= i + 1; ++j) {
+    const std::uint16_t c = r.range_cm[j];
+    if (c == kUnusable) return false;
+    if (c == kNoReturn ? !(d < static_cast<double>(r.range_max_m))
+                       : static_cast<double>(c) * 0.01 < d + config_.free_margin_m) {
+      return false;
+    }
+  }
+  // A surface beyond seen at a slant (the returns beside the beam far apart along it) may be the
+  // one @p p lies on, seen from along it: a few centimetres of pose error move where the beam
+  // meets it by decimetres. Only a surface met at least at kMinSlant counts.
+  if (r.range_cm[i - 1] < kUnusable && r.range_cm[i + 1] < kUnusable) {
+    const auto at = [&](std::size_t j) -> Eigen::Vector2d {
+      const double bearing = r.angle_min_rad + r.angle_increment_rad * static_cast<double>(j);
+      return static_cast<double>(r.range_cm[j]) * 0.01 *
+             Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+    };
+    const Eigen::Vector2d along = at(i + 1) - at(i - 1);
+    const double length = along.norm();
+    const Eigen::Vector2d u = q / d;
+    if (length > 0.0 && std::abs(u.x() * along.y() - u.y() * along.x()) < kMinSlant * length) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// Walks the scans from through_gap_s to through_horizon_s away from scan @p k, later (@p step 1)
+// or earlier (-1), and says whether through_min_scans of them saw through @p p before one hit it
+// (a return within free_margin_m of it on the beam toward it).
+bool OfflineCleaner::seen_through(std::size_t k, const Eigen::Vector2d& p, int step) const {
+  const double t0 = scans_[k].stamp_s;
+  int through = 0;
+  for (auto j = static_cast<std::ptrdiff_t>(k) + step;
+       j >= 0 && j < static_cast<std::ptrdiff_t>(scans_.size()); j += step) {
+    const auto u = static_cast<std::size_t>(j);
+    const double dt = std::abs(scans_[u].stamp_s - t0);
+    if (dt > config_.through_horizon_s) break;
+    if (dt < config_.through_gap_s) continue;
+    if (sees_through(u, p)) {
+      if (++through >= config_.through_min_scans) return true;
+    } else if (hits(u, p)) {
+      return false;  // Still (or again) there.
+    }
   }
   return false;
+}
+
+// Beam @p b of scan @p k returned the same range (kAttached_m) in the scans before and after while
+// the sensor moved (kAttachedMotion_m): a part of the robot, or something carried along with it.
+// Its place in the fixed frame moves with the sensor: the scanner sees through where it was.
+bool OfflineCleaner::attached(std::size_t k, std::size_t b) const {
+  if (k == 0 || k + 1 >= scans_.size()) return false;
+  const ScanRecord& r = scans_[k];
+  for (const std::size_t j : {k - 1, k + 1}) {
+    const ScanRecord& o = scans_[j];
+    if (!o.pose || o.range_cm.size() != r.range_cm.size() || o.range_cm[b] >= kUnusable ||
+        std::abs(static_cast<int>(o.range_cm[b]) - static_cast<int>(r.range_cm[b])) >
+            kAttached_cm ||
+        ((o.pose->translation() - r.pose->translation()).norm() < kAttachedMotion_m &&
+         std::abs(wrap_angle(o.pose->yaw_rad - r.pose->yaw_rad)) < kAttachedTurn_rad)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// Scan @p k's beam toward @p p returned within free_margin_m of it.
+bool OfflineCleaner::hits(std::size_t k, const Eigen::Vector2d& p) const {
+  const ScanRecord& r = scans_[k];
+  if (!r.pose || !(r.angle_increment_rad > 0.0)) return false;
+  Eigen::Vector2d q;
+  const double index = beam_toward(r, p, q);
+  if (!(index >= 0.0 && index < static_cast<double>(r.range_cm.size()))) return false;
+  const std::uint16_t c = r.range_cm[static_cast<std::size_t>(index)];
+  return c < kUnusable &&
+         std::abs(static_cast<double>(c) * 0.01 - q.norm()) < config_.free_margin_m;
 }
 
 void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector<CleanLabel>& out) {
@@ -252,6 +275,42 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
   }
   out.assign(n, CleanLabel::kInvalid);
   const std::vector<Eigen::Vector2d>& unit = directions_.of(scan);
+  // A small thing (or a run of beams in no object) whose place the scanner saw through before it
+  // came or after it left: decided for the whole thing by the majority of its beams (a beam at
+  // its edge is seen past from elsewhere).
+  const auto objects = static_cast<std::int32_t>(record.track_of.size());
+  group_.assign(n, -1);
+  std::int32_t groups = objects;
+  for (std::size_t b = 0; b < n; ++b) {
+    const auto online = static_cast<BeamLabel>(record.labels[b]);
+    if (!scan.is_valid(b) || online == BeamLabel::kDynamic || online == BeamLabel::kUnknown) {
+      continue;
+    }
+    const bool in_object = !record.object.empty() && record.object[b] != kNone;
+    if (in_object) {
+      if (record.width_of[record.object[b]] * 0.02 <= config_.max_width_m) {
+        group_[b] = record.object[b];
+      }
+    } else if (b > 0 && group_[b - 1] >= objects &&
+               std::abs(scan.ranges_m[b] - scan.ranges_m[b - 1]) < kRunGap_m) {
+      group_[b] = group_[b - 1];
+    } else {
+      group_[b] = groups++;
+    }
+  }
+  votes_.assign(static_cast<std::size_t>(groups), {0, 0});
+  if (config_.through_min_scans > 0 && record.pose) {
+    for (std::size_t b = 0; b < n; ++b) {
+      if (group_[b] < 0) continue;
+      auto& [beams, through] = votes_[static_cast<std::size_t>(group_[b])];
+      ++beams;
+      const Eigen::Vector2d p =
+          PoseTransform(beam_pose(record, b))(static_cast<double>(scan.ranges_m[b]) * unit[b]);
+      if (!attached(index, b) && (seen_through(index, p, 1) || seen_through(index, p, -1))) {
+        ++through;
+      }
+    }
+  }
   for (std::size_t b = 0; b < n; ++b) {
     const auto online = static_cast<BeamLabel>(record.labels[b]);
     if (online == BeamLabel::kInvalid) continue;
@@ -266,18 +325,16 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
     const bool moved_later =
         moving && record.stamp_s <= t->object.last_dynamic_s &&
         (online == BeamLabel::kDynamic ||
-         record.width_of[record.object[b]] * 0.02 <= config_.moved_max_width_m) &&
+         record.width_of[record.object[b]] * 0.02 <= config_.max_width_m) &&
         near_where_it_moved(*t, record.stamp_s, record.position_of[record.object[b]]);
-    const bool vacated =
-        config_.vacated_min_scans > 0 && record.pose && scan.is_valid(b) &&
-        vacated_at(
-            PoseTransform(beam_pose(record, b))(static_cast<double>(scan.ranges_m[b]) * unit[b]),
-            record.stamp_s);
+    const bool vacated = group_[b] >= 0 && !moved_later && [&] {
+      const auto& [beams, through] = votes_[static_cast<std::size_t>(group_[b])];
+      return through > 0 && 2 * through >= beams;
+    }();
     CleanLabel label;
     if (online == BeamLabel::kDynamic || online == BeamLabel::kUnknown) {
-      // Removed online: kept only when its object never moved and its place was never left.
-      label = t != nullptr && !moving && !vacated ? CleanLabel::kRestored
-                                                  : static_cast<CleanLabel>(online);
+      // Removed online: kept only when its object never moved.
+      label = t != nullptr && !moving ? CleanLabel::kRestored : static_cast<CleanLabel>(online);
     } else if (moved_later) {
       label = CleanLabel::kMovedLater;
     } else if (vacated) {

@@ -31,10 +31,12 @@ FilterResult all_static(const LaserScan& scan) {
   return r;
 }
 
-TEST(OfflineCleaner, WhatStoodWhereTheScannerLaterSawThroughIsVacatedWhenAsked) {
-  for (const int vacated_scans : {0, 5}) {
+// The box's beams from 1 s (through_gap_s) before it left: later scans saw through its place.
+// Earlier ones looked ahead and saw the box still there first.
+TEST(OfflineCleaner, WhatStoodWhereTheScannerLaterSawThroughIsRemovedWhenAsked) {
+  for (const int through_scans : {0, 2}) {
     CleanConfig config;
-    config.vacated_min_scans = vacated_scans;
+    config.through_min_scans = through_scans;
     OfflineCleaner cleaner(config);
     for (int k = 0; k < 40; ++k) {
       const LaserScan s = scan_at(k);
@@ -46,28 +48,29 @@ TEST(OfflineCleaner, WhatStoodWhereTheScannerLaterSawThroughIsVacatedWhenAsked) 
       const LaserScan s = scan_at(k);
       cleaner.label(static_cast<std::size_t>(k), s, labels);
       for (int b = 0; b < 101; ++b) {
-        const bool box = k < 20 && b >= 42 && b <= 58;  // Its edges' cells: either way.
+        const bool box = k < 20 && b >= 40 && b <= 60;
         if (box) {
-          EXPECT_EQ(labels[b], vacated_scans > 0 ? CleanLabel::kVacated : CleanLabel::kNoObject)
+          EXPECT_EQ(labels[b],
+                    through_scans > 0 && k >= 10 ? CleanLabel::kVacated : CleanLabel::kNoObject)
               << "scan " << k << " beam " << b;
-        } else if (b < 38 || b > 62) {
+        } else {
           EXPECT_EQ(labels[b], CleanLabel::kNoObject) << "scan " << k << " beam " << b;
         }
       }
     }
-    EXPECT_EQ(cleaner.counts().vacated > 0, vacated_scans > 0);
+    EXPECT_EQ(cleaner.counts().vacated, through_scans > 0 ? 10 * 21 : 0);
   }
 }
 
 TEST(OfflineCleaner, BadParametersAndScansAreRefusedByName) {
   CleanConfig config;
-  config.cell_size_m = 0.0;
+  config.max_width_m = 0.0;
   EXPECT_THROW(
       {
         try {
           OfflineCleaner c(config);
         } catch (const std::invalid_argument& e) {
-          EXPECT_NE(std::string(e.what()).find("clean.cell_size_m"), std::string::npos);
+          EXPECT_NE(std::string(e.what()).find("clean.max_width_m"), std::string::npos);
           throw;
         }
       },

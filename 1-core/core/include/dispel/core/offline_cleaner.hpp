@@ -4,20 +4,21 @@
 /// has already been through. An online filter sees only the past: someone who stands still until
 /// after the recording's last scan of them is kept, and an object is removed only from the scan in
 /// which it is found moving. With every scan at hand the cleaner also removes
-/// - every beam of an object (a track of the online filter) that was found moving at any time,
-///   from the first scan in which it was seen (retroactive removal), and
-/// - the beams that hit space which later scans saw through, before anything hit it again (what
-///   stood there left),
+/// - the beams of an object (a track of the online filter) that was found moving at some time,
+///   from the first scan in which it was seen until it last moved (retroactive removal), and
+/// - optionally (CleanConfig::through_min_scans), a small thing whose place the scanner saw
+///   through later or earlier (what stood there left, or was not there yet),
 /// and keeps what the online filter took for moving only for a moment and never again (a wall
 /// piece whose outline slid for a scan or two). Both directions in time: what an object did later
-/// decides about its earlier beams, and what the scanner saw later decides about a place.
+/// decides about its earlier beams, and what the scanner saw at other times decides about a place.
 ///
 /// Beams are placed where they were measured: the sensor moves during a sweep (time_increment),
 /// at the pace it moved since the scan before.
 ///
-/// Memory: per scan, its stamp, pose and motion, one byte per beam (the online label) and two per
-/// beam (the online object), and four bytes per object (its track); per track a summary (about 64
-/// bytes); per map cell hit by a beam about 48 bytes, plus 16 bytes per time it was vacated.
+/// Memory: per scan, its stamp, pose, motion and geometry (about 100 bytes), five bytes per beam
+/// (the online label, the online object, the range in cm) and 13 per object (its track, the
+/// track's position, its width); per track a summary (about 100 bytes) and 12 bytes per scan in
+/// which it was dynamic.
 
 #include <cstdint>
 #include <optional>
@@ -25,7 +26,6 @@
 #include <vector>
 
 #include "dispel/core/dynamic_filter.hpp"
-#include "dispel/core/integer_key_map.hpp"
 #include "dispel/core/laser_scan.hpp"
 #include "dispel/core/pose2.hpp"
 
@@ -33,9 +33,6 @@ namespace dispel {
 
 /// Parameters of the offline cleaner. Defaults are dispel's.
 struct CleanConfig {
-  /// Side of the cells in which the cleaner remembers where beams ended and what the scanner saw
-  /// through.
-  double cell_size_m = 0.1;
   /// A track counts as moving when the online filter labelled it dynamic in at least this many
   /// scans (a wall piece whose outline slid is dynamic for a scan or two).
   int moving_min_scans = 3;
@@ -45,18 +42,23 @@ struct CleanConfig {
   /// this distance (m) of where the track was found moving nearest in time: a track that took
   /// over a piece of wall for a while does not take the wall with it.
   double moved_from_m = 1.0;
-  /// ... and only where its object is at most this wide (m): a person, two legs, a cart. A track
-  /// that ended on a walker passing a wall took the wall piece with it.
-  double moved_max_width_m = 1.5;
-  /// A place hit by beams counts as vacated when, after its last hit, the scanner saw through it
-  /// in this many scans (none hit it in between): what stood there left. 0: off, the default:
-  /// on the simulated office at 1 m/s it took a quarter of the walls (docs/clean.md).
-  int vacated_min_scans = 0;
-  /// A beam's last this-many metres do not count as seeing through (range noise, mixed pixels,
-  /// walls seen at a grazing angle).
+  /// The cleaner removes (beyond what the online filter removed) only objects at most this wide
+  /// (m), and beams in no object: a person, two legs, a cart. A track that ended on a walker
+  /// passing a wall took the wall piece with it.
+  double max_width_m = 1.5;
+  /// Such a beam is removed when this many scans saw through its place, from through_gap_s to
+  /// through_horizon_s after it (or before it), before one hit it again: what stood there left
+  /// (or was not there yet); decided per object (or run of beams in no object) by the majority
+  /// of its beams. 0: off, the default: on the real negative_2 (no people) it removed 0.7-2.1 %
+  /// of the beams (docs/clean.md).
+  int through_min_scans = 0;
+  double through_gap_s = 1.0;
+  double through_horizon_s = 20.0;
+  /// Seeing through a place: the beam toward it and both beside it returned from at least this
+  /// far (m) beyond it (range noise, a wall seen at a slant), or nothing returned.
   double free_margin_m = 0.3;
-  /// Beams are traced through the cells up to this range (m); beyond it they see nothing through.
-  double max_trace_range_m = 20.0;
+  /// Places farther than this (m) from the scanner are not asked about.
+  double max_range_m = 20.0;
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -70,8 +72,8 @@ enum class CleanLabel : std::uint8_t {
   kNoObject = 3,    ///< Kept: in no object.
   kInvalid = 4,     ///< No usable range: untouched.
   kMovedLater = 5,  ///< Removed: its object moved at another time (retroactive removal).
-  kVacated = 6,     ///< Removed: the scanner later saw through where it ended (it left).
-  kRestored = 7,    ///< Kept: the online filter removed it, but its object never moved.
+  kVacated = 6,   ///< Removed: the scanner saw through its place later or earlier (it left, came).
+  kRestored = 7,  ///< Kept: the online filter removed it, but its object never moved.
 };
 
 /// True for the labels whose beams are removed (NaN in `<scan>_clean`).
@@ -98,7 +100,6 @@ struct CleanCounts {
   std::int64_t valid_beams = 0;
   std::int64_t removed_online = 0;  ///< kDynamic + kUnknown.
   std::int64_t moved_later = 0, vacated = 0, restored = 0;
-  std::int64_t cells = 0, vacated_episodes = 0;
 };
 
 /// Two passes over a recording: add() each scan with what the online filter made of it, in time
@@ -136,6 +137,9 @@ class OfflineCleaner {
     std::vector<std::uint32_t> track_of;       // Per object: index into tracks_, kNone32.
     std::vector<Eigen::Vector2f> position_of;  // Per object: its track's position then.
     std::vector<std::uint8_t> width_of;        // Per object: its width, in 2 cm (255: wider).
+    std::vector<std::uint16_t> range_cm;       // Per beam, cm; kNoReturn, kUnusable.
+    double angle_min_rad = 0.0, angle_increment_rad = 0.0;
+    float range_max_m = 0.0F;
   };
   struct Track {
     CleanedObject object;
@@ -143,27 +147,17 @@ class OfflineCleaner {
     // Where it was when the online filter found it moving, in time order.
     std::vector<std::pair<double, Eigen::Vector2f>> moving_at;
   };
-  struct Episode {  // A cell hit from start to end, then seen through: vacated.
-    double start_s, end_s;
-    std::int32_t next;  // The cell's previous episode (-1: none).
-  };
-  struct Cell {
-    double start_s = 0.0;  // First hit since it was last vacated (NaN-free: see open).
-    double last_hit_s = 0.0;
-    std::uint32_t last_hit_scan = 0;
-    std::uint32_t last_free_scan = 0;
-    std::int32_t free_scans = 0;  // Scans that saw through it since its last hit.
-    bool open = false;            // Hit since it was last vacated.
-    std::int32_t episodes = -1;   // Its vacated episodes (a list in episodes_).
-  };
   static constexpr std::uint16_t kNone = 0xFFFF;
+  static constexpr std::uint16_t kNoReturn = 0xFFFF, kUnusable = 0xFFFE;  // In range_cm.
   static constexpr std::uint32_t kNone32 = 0xFFFFFFFFU;
 
-  std::uint64_t key_of(const Eigen::Vector2d& p) const;
   // The sensor's pose when beam @p b of @p record's scan was measured.
   static Pose2 beam_pose(const ScanRecord& record, std::size_t b);
-  void see_through(const Eigen::Vector2d& from, const Eigen::Vector2d& to, std::uint32_t scan);
-  bool vacated_at(const Eigen::Vector2d& p, double stamp_s) const;
+  bool sees_through(std::size_t k, const Eigen::Vector2d& p) const;
+  bool hits(std::size_t k, const Eigen::Vector2d& p) const;
+  static double beam_toward(const ScanRecord& r, const Eigen::Vector2d& p, Eigen::Vector2d& q);
+  bool attached(std::size_t k, std::size_t b) const;
+  bool seen_through(std::size_t k, const Eigen::Vector2d& p, int step) const;
   bool near_where_it_moved(const Track& track, double stamp_s,
                            const Eigen::Vector2f& position) const;
 
@@ -171,9 +165,11 @@ class OfflineCleaner {
   std::vector<ScanRecord> scans_;
   std::vector<Track> tracks_;
   std::unordered_map<std::uint64_t, std::uint32_t> track_index_;
-  IntegerKeyMap<Cell> cells_;
-  std::vector<Episode> episodes_;
   BeamDirections directions_;
+  // label(): each beam's thing (object or run of beams in no object; -1: none asked about), and
+  // per thing its beams asked about and those seen through elsewhen.
+  std::vector<std::int32_t> group_;
+  std::vector<std::pair<std::int32_t, std::int32_t>> votes_;
   CleanCounts counts_;
   bool finished_ = false;
 };

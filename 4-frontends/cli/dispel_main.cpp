@@ -59,17 +59,29 @@ int main(int argc, char** argv) {
       ->add_option("input", filter.job.input, "IN.bag, an MRPT IN.rawlog, or a CARMEN .log/.clf")
       ->required();
   filter_cmd->add_option("-o,--output", filter.job.output, "OUT.bag to write")->required();
-  filter_cmd->add_option("--config", config_path, "YAML configuration (see config/default.yaml)");
-  filter_cmd->add_option("--scan-topic", filter.job.scan_topic, "LaserScan topic")
-      ->capture_default_str();
-  filter_cmd
-      ->add_option("--odom-topic", filter.job.odom_topic,
-                   "Odometry topic; none: laser-only (also when the recording has none)")
-      ->capture_default_str();
-  filter_cmd->add_flag("--static-sensor", filter.job.static_sensor,
-                       "The sensor does not move (no odometry needed)");
-  filter_cmd->add_flag("--scale-to-scanner", filter.job.scale_to_scanner,
-                       "Carry N_min, L_d and L_s over from the thesis's scanner to this one");
+  // filter and clean: the online filter's configuration, the topics and the sensor.
+  const auto add_filter_options = [](CLI::App* command, dispel::jobs::FilterJobOptions& job,
+                                     std::string& config) {
+    command->add_option("--config", config, "YAML configuration (see config/default.yaml)");
+    command->add_option("--scan-topic", job.scan_topic, "LaserScan topic")->capture_default_str();
+    command
+        ->add_option("--odom-topic", job.odom_topic,
+                     "Odometry topic; none: laser-only (also when the recording has none)")
+        ->capture_default_str();
+    command->add_flag("--static-sensor", job.static_sensor,
+                      "The sensor does not move (no odometry needed)");
+    command->add_flag("--scale-to-scanner", job.scale_to_scanner,
+                      "Carry N_min, L_d and L_s over from the thesis's scanner to this one");
+  };
+  // filter, clean and convert: how the output is compressed.
+  const auto add_compression_option = [](CLI::App* command, std::string& compression) {
+    command
+        ->add_option("--compression", compression,
+                     "Output compression: bz2 or lz4 for a ROS 1 bag, zstd or lz4 for MCAP")
+        ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))
+        ->capture_default_str();
+  };
+  add_filter_options(filter_cmd, filter.job, config_path);
   filter_cmd->add_option("--stats", filter.stats_path, "Write statistics as JSON here");
   filter_cmd
       ->add_option("--resident-heap-mb", filter.resident_heap_mb,
@@ -77,11 +89,7 @@ int main(int argc, char** argv) {
                    "touched the first time; 0: none")
       ->check(CLI::Range(0, 4096))
       ->capture_default_str();
-  filter_cmd
-      ->add_option("--compression", filter.compression,
-                   "Output compression: bz2 or lz4 for a ROS 1 bag, zstd or lz4 for MCAP")
-      ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))
-      ->capture_default_str();
+  add_compression_option(filter_cmd, filter.compression);
   std::string filter_format = "auto";
   // filter and convert: the output's format, by its name or as asked.
   const auto add_format_option = [](CLI::App* command, std::string& format) {
@@ -98,32 +106,17 @@ int main(int argc, char** argv) {
   std::string clean_config;
   CLI::App* clean_cmd = app.add_subcommand(
       "clean",
-      "Offline: remove from a whole recording everything that moved at any time, from the first "
-      "scan it was seen, and what stood and later left (writes <scan topic>_clean)");
+      "Offline: remove from a whole recording what moved, from the first scan it was seen until "
+      "it last moved (writes <scan topic>_clean; docs/clean.md)");
   clean_cmd
       ->add_option("input", clean.job.filter.input,
                    "IN: .bag, .mcap, .db3, a rosbag2 folder, .rawlog")
       ->required();
   clean_cmd->add_option("-o,--output", clean.job.filter.output, "OUT to write")->required();
-  clean_cmd->add_option("--config", clean_config,
-                        "YAML configuration of the online filter (see config/default.yaml)");
-  clean_cmd->add_option("--scan-topic", clean.job.filter.scan_topic, "LaserScan topic")
-      ->capture_default_str();
-  clean_cmd
-      ->add_option("--odom-topic", clean.job.filter.odom_topic,
-                   "Odometry topic; none: laser-only (also when the recording has none)")
-      ->capture_default_str();
-  clean_cmd->add_flag("--static-sensor", clean.job.filter.static_sensor,
-                      "The sensor does not move (no odometry needed)");
-  clean_cmd->add_flag("--scale-to-scanner", clean.job.filter.scale_to_scanner,
-                      "Carry N_min, L_d and L_s over from the thesis's scanner to this one");
+  add_filter_options(clean_cmd, clean.job.filter, clean_config);
   clean_cmd->add_option("--stats", clean.stats_path,
                         "Write statistics (and each object) as JSON here");
-  clean_cmd
-      ->add_option("--compression", clean.compression,
-                   "Output compression: bz2 or lz4 for a ROS 1 bag, zstd or lz4 for MCAP")
-      ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))
-      ->capture_default_str();
+  add_compression_option(clean_cmd, clean.compression);
   clean_cmd
       ->add_option("--moving-scans", clean.job.clean.moving_min_scans,
                    "An object moved when the online filter found it moving in this many scans...")
@@ -169,11 +162,7 @@ int main(int argc, char** argv) {
   convert_cmd
       ->add_option("-o,--output", convert.output, "OUT.bag, OUT.mcap, OUT.db3 or a new folder OUT")
       ->required();
-  convert_cmd
-      ->add_option("--compression", convert_compression,
-                   "bz2 or lz4 for a ROS 1 bag, zstd or lz4 for MCAP")
-      ->check(CLI::IsMember({"none", "bz2", "lz4", "zstd"}))
-      ->capture_default_str();
+  add_compression_option(convert_cmd, convert_compression);
   std::string convert_format = "auto";
   add_format_option(convert_cmd, convert_format);
 

@@ -147,6 +147,38 @@ bool OfflineCleaner::near_where_it_moved(const Track& track, double stamp_s,
   return (later != at.end() && near(*later)) || (later != at.begin() && near(*(later - 1)));
 }
 
+// A moving track's object before it moved (or while it paused) is removed only when the scanner
+// saw through its place in this many scans after the track moved on, before any scan hit it: a
+// person who stood and walked off left it empty; a pillar whose track took over a passer-by is
+// still there.
+constexpr int kLeftScans = 2;
+
+bool OfflineCleaner::left_after(const Eigen::Vector2d& p, double from_s) const {
+  const double start = from_s + config_.through_gap_s;
+  auto k = static_cast<std::size_t>(
+      std::lower_bound(scans_.begin(), scans_.end(), start,
+                       [](const ScanRecord& r, double t) { return r.stamp_s < t; }) -
+      scans_.begin());
+  int through = 0;
+  for (; k < scans_.size() && scans_[k].stamp_s <= start + config_.through_horizon_s; ++k) {
+    if (sees_through(k, p)) {
+      if (++through >= kLeftScans) return true;
+    } else if (hits(k, p)) {
+      return false;
+    }
+  }
+  return false;
+}
+
+// When @p track was next found moving at or after @p stamp_s (its last time if never).
+double OfflineCleaner::next_moving_s(const Track& track, double stamp_s) {
+  const auto& at = track.moving_at;
+  const auto next = std::lower_bound(
+      at.begin(), at.end(), stamp_s,
+      [](const std::pair<double, Eigen::Vector2f>& a, double t) { return a.first < t; });
+  return next != at.end() ? next->first : track.object.last_dynamic_s;
+}
+
 constexpr int kAttached_cm = 3;
 // Neighbouring beams in no object whose ranges differ by less than this are one run (one thing).
 constexpr float kRunGap_m = 0.3F;
@@ -298,6 +330,34 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
       group_[b] = groups++;
     }
   }
+  // Per object of a moving track not found moving in this scan: whether its place was left
+  // (kLeftScans) after the track moved on, by the majority of its beams (1), or not (0).
+  left_.assign(static_cast<std::size_t>(objects), 0);
+  if (record.pose && objects > 0) {
+    std::vector<std::pair<std::int32_t, std::int32_t>>& tally = left_votes_;
+    tally.assign(static_cast<std::size_t>(objects), {0, 0});
+    for (std::size_t b = 0; b < n; ++b) {
+      const auto online = static_cast<BeamLabel>(record.labels[b]);
+      if (!scan.is_valid(b) || record.object[b] == kNone || online == BeamLabel::kDynamic ||
+          online == BeamLabel::kUnknown) {
+        continue;
+      }
+      const std::uint16_t o = record.object[b];
+      if (record.track_of[o] == kNone32 || record.width_of[o] * 0.02 > config_.max_width_m) {
+        continue;
+      }
+      const Track& t = tracks_[record.track_of[o]];
+      if (!t.object.moving || record.stamp_s > t.object.last_dynamic_s) continue;
+      auto& [beams, left] = tally[o];
+      ++beams;
+      const Eigen::Vector2d p =
+          PoseTransform(beam_pose(record, b))(static_cast<double>(scan.ranges_m[b]) * unit[b]);
+      if (left_after(p, next_moving_s(t, record.stamp_s))) ++left;
+    }
+    for (std::size_t o = 0; o < left_.size(); ++o) {
+      left_[o] = tally[o].second > 0 && 2 * tally[o].second >= tally[o].first ? 1 : 0;
+    }
+  }
   votes_.assign(static_cast<std::size_t>(groups), {0, 0});
   if (config_.through_min_scans > 0 && record.pose) {
     for (std::size_t b = 0; b < n; ++b) {
@@ -324,8 +384,7 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
     // where it moved.
     const bool moved_later =
         moving && record.stamp_s <= t->object.last_dynamic_s &&
-        (online == BeamLabel::kDynamic ||
-         record.width_of[record.object[b]] * 0.02 <= config_.max_width_m) &&
+        (online == BeamLabel::kDynamic || left_[record.object[b]] == 1) &&
         near_where_it_moved(*t, record.stamp_s, record.position_of[record.object[b]]);
     const bool vacated = group_[b] >= 0 && !moved_later && [&] {
       const auto& [beams, through] = votes_[static_cast<std::size_t>(group_[b])];

@@ -22,7 +22,7 @@ using test::temp_path;
 // People who stand for 10-20 s and then walk off (config/scenarios/stand_then_leave.yaml, seed
 // 1), filtered online and cleaned offline: the cleaner removes far more of the people while they
 // stand (the online filter cannot know yet that they will walk) and keeps the walls. Measured:
-// still people removed 0.087 online, 0.345 clean; moving 0.597, 0.620; walls kept 1.0000, 0.9986.
+// still people removed 0.087 online, 0.285 clean; moving 0.597, 0.620; walls kept 1.0000, 1.0000.
 TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
   const sim::Scenario scenario =
       io::load_scenario(source_path("config/scenarios/stand_then_leave.yaml"));
@@ -44,10 +44,10 @@ TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
   const eval::Rates online = evaluate_bags(sim_bag, f.output);
   const eval::Rates clean = evaluate_bags(sim_bag, c.filter.output, "/scan_clean");
   EXPECT_GT(clean.still_beams, 5000);
-  EXPECT_GE(clean.still_removed_rate(), 0.30);
+  EXPECT_GE(clean.still_removed_rate(), 0.25);
   EXPECT_GE(clean.still_removed_rate(), 3.0 * online.still_removed_rate());
   EXPECT_GE(clean.rejection_rate(), online.rejection_rate());
-  EXPECT_GE(clean.preservation_rate(), 0.998);
+  EXPECT_GE(clean.preservation_rate(), 0.9999);
 
   // Every scan has its cleaned copy and its labels; a beam is NaN exactly where it is removed.
   const test::BagContents out = read_bag(c.filter.output);
@@ -82,9 +82,38 @@ TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
   for (const std::string& p : {sim_bag, f.output, c.filter.output}) std::remove(p.c_str());
 }
 
+// The thesis's hall (config/scenarios/thesis_hall.yaml, seed 2: its mapping test): people walk
+// and stand about a slow robot among pillars, walls out of range. Before a moving track's
+// standing part was removed only where the scanner later saw through it, a pillar whose track
+// had taken over a passer-by went with it: 0.61 of the static beams kept. Measured: walls kept
+// 1.0000 online and clean; moving removed 0.936, 0.982; still people removed 0.738, 0.874.
+TEST(CleanJob, TheThesisHallsStandingPeopleGoAndItsPillarsStay) {
+  const sim::Scenario scenario =
+      io::load_scenario(source_path("config/scenarios/thesis_hall.yaml"));
+  const std::string sim_bag = temp_path("thesis_hall_clean_sim.bag");
+  simulate_to_recording(scenario, 2, scenario.duration_s, sim_bag);
+  FilterJobOptions f;
+  f.input = sim_bag;
+  f.output = temp_path("thesis_hall_filtered.bag");
+  f.config_path = source_path("config/default_masked.yaml");
+  run_filter_job(f);
+  CleanJobOptions c;
+  c.filter = f;
+  c.filter.output = temp_path("thesis_hall_clean.bag");
+  run_clean_job(c);
+  const eval::Rates online = evaluate_bags(sim_bag, f.output);
+  const eval::Rates clean = evaluate_bags(sim_bag, c.filter.output, "/scan_clean");
+  EXPECT_GE(clean.preservation_rate(), 0.9999);
+  EXPECT_GE(clean.rejection_rate(), 0.97);
+  EXPECT_GT(clean.rejection_rate(), online.rejection_rate());
+  EXPECT_GE(clean.still_removed_rate(), 0.85);
+  EXPECT_GT(clean.still_removed_rate(), online.still_removed_rate() + 0.1);
+  for (const std::string& p : {sim_bag, f.output, c.filter.output}) std::remove(p.c_str());
+}
+
 // A real robot among no people (negative_2): every beam removed is a false removal. Cleaned:
-// left 0.19 %, right 0.12 %, rear 0.04 % of the valid beams (the online filter 0.19 / 0.13 /
-// 0.05 %; issue target 0.1 %, not reached on the left and right lasers).
+// left 0.103 %, right 0.092 %, rear 0.036 % of the valid beams (the online filter 0.19 / 0.13 /
+// 0.05 %; issue target 0.1 %, just missed on the left laser).
 TEST(CleanJob, RealRobotWithoutPeopleKeepsItsWalls) {
   for (const std::string laser : {"/left_scan", "/right_scan", "/rear_scan"}) {
     CleanJobOptions c;
@@ -97,7 +126,7 @@ TEST(CleanJob, RealRobotWithoutPeopleKeepsItsWalls) {
     const std::int64_t removed_beams =
         stats.counts.removed_online + stats.counts.moved_later + stats.counts.vacated;
     EXPECT_LE(static_cast<double>(removed_beams),
-              0.002 * static_cast<double>(stats.counts.valid_beams))
+              0.0011 * static_cast<double>(stats.counts.valid_beams))
         << laser;
     std::remove(c.filter.output.c_str());
   }

@@ -5,7 +5,8 @@
 /// after the recording's last scan of them is kept, and an object is removed only from the scan in
 /// which it is found moving. With every scan at hand the cleaner also removes
 /// - the beams of an object (a track of the online filter) that was found moving at some time,
-///   from the first scan in which it was seen until it last moved (retroactive removal), and
+///   from the first scan in which it was seen until it last moved (retroactive removal; where it
+///   was not found moving, only once the scanner saw through its place after it moved on), and
 /// - optionally (CleanConfig::through_min_scans), a small thing whose place the scanner saw
 ///   through later or earlier (what stood there left, or was not there yet),
 /// and keeps what the online filter took for moving only for a moment and never again (a wall
@@ -157,6 +158,9 @@ class OfflineCleaner {
   bool hits(std::size_t k, const Eigen::Vector2d& p) const;
   static double beam_toward(const ScanRecord& r, const Eigen::Vector2d& p, Eigen::Vector2d& q);
   bool attached(std::size_t k, std::size_t b) const;
+  // Whether the scans from through_gap_s after @p from_s on saw through @p p before one hit it.
+  bool left_after(const Eigen::Vector2d& p, double from_s) const;
+  static double next_moving_s(const Track& track, double stamp_s);
   bool seen_through(std::size_t k, const Eigen::Vector2d& p, int step) const;
   bool near_where_it_moved(const Track& track, double stamp_s,
                            const Eigen::Vector2f& position) const;
@@ -170,6 +174,8 @@ class OfflineCleaner {
   // per thing its beams asked about and those seen through elsewhen.
   std::vector<std::int32_t> group_;
   std::vector<std::pair<std::int32_t, std::int32_t>> votes_;
+  std::vector<std::uint8_t> left_;  // label(): per object, see left_after().
+  std::vector<std::pair<std::int32_t, std::int32_t>> left_votes_;
   CleanCounts counts_;
   bool finished_ = false;
 };

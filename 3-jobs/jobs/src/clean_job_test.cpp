@@ -19,30 +19,51 @@ using test::read_bag;
 using test::source_path;
 using test::temp_path;
 
+// A scenario simulated with @p seed, filtered online and cleaned offline with @p filter's options
+// (input and outputs set here), both evaluated against the simulator's ground truth.
+struct OnlineAndClean {
+  std::string sim_bag, filtered_bag, clean_bag;
+  CleanJobStats stats;
+  eval::Rates online, clean;
+  ~OnlineAndClean() {
+    for (const std::string& p : {sim_bag, filtered_bag, clean_bag}) std::remove(p.c_str());
+  }
+};
+
+void filter_and_clean(const std::string& scenario_name, std::uint64_t seed, FilterJobOptions filter,
+                      OnlineAndClean& out) {
+  const sim::Scenario scenario =
+      io::load_scenario(source_path("config/scenarios/" + scenario_name + ".yaml"));
+  out.sim_bag = temp_path(scenario_name + "_sim.bag");
+  out.filtered_bag = temp_path(scenario_name + "_filtered.bag");
+  out.clean_bag = temp_path(scenario_name + "_clean.bag");
+  simulate_to_recording(scenario, seed, scenario.duration_s, out.sim_bag);
+  filter.input = out.sim_bag;
+  filter.output = out.filtered_bag;
+  run_filter_job(filter);
+  CleanJobOptions c;
+  c.filter = filter;
+  c.filter.output = out.clean_bag;
+  out.stats = run_clean_job(c);
+  out.online = evaluate_bags(out.sim_bag, out.filtered_bag);
+  out.clean = evaluate_bags(out.sim_bag, out.clean_bag, "/scan_clean");
+}
+
 // People who stand for 10-20 s and then walk off (config/scenarios/stand_then_leave.yaml, seed
 // 1), filtered online and cleaned offline: the cleaner removes far more of the people while they
 // stand (the online filter cannot know yet that they will walk) and keeps the walls. Measured:
 // still people removed 0.087 online, 0.285 clean; moving 0.597, 0.620; walls kept 1.0000, 1.0000.
 TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
-  const sim::Scenario scenario =
-      io::load_scenario(source_path("config/scenarios/stand_then_leave.yaml"));
-  const std::string sim_bag = temp_path("stand_then_leave.bag");
-  simulate_to_recording(scenario, 1, scenario.duration_s, sim_bag);
-
   FilterJobOptions f;
-  f.input = sim_bag;
-  f.output = temp_path("stand_then_leave_filtered.bag");
   f.scale_to_scanner = true;
-  run_filter_job(f);
-  CleanJobOptions c;
-  c.filter = f;
-  c.filter.output = temp_path("stand_then_leave_clean.bag");
-  const CleanJobStats stats = run_clean_job(c);
+  OnlineAndClean run;
+  filter_and_clean("stand_then_leave", 1, f, run);
+  const CleanJobStats& stats = run.stats;
+  const CleanJobOptions c;  // The cleaner's defaults.
   EXPECT_EQ(stats.scans, 347);
   EXPECT_EQ(stats.counts.scans_with_pose, stats.scans);
-
-  const eval::Rates online = evaluate_bags(sim_bag, f.output);
-  const eval::Rates clean = evaluate_bags(sim_bag, c.filter.output, "/scan_clean");
+  const eval::Rates& online = run.online;
+  const eval::Rates& clean = run.clean;
   EXPECT_GT(clean.still_beams, 5000);
   EXPECT_GE(clean.still_removed_rate(), 0.25);
   EXPECT_GE(clean.still_removed_rate(), 3.0 * online.still_removed_rate());
@@ -50,7 +71,7 @@ TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
   EXPECT_GE(clean.preservation_rate(), 0.9999);
 
   // Every scan has its cleaned copy and its labels; a beam is NaN exactly where it is removed.
-  const test::BagContents out = read_bag(c.filter.output);
+  const test::BagContents out = read_bag(run.clean_bag);
   const auto& scans = out.scans.at("/scan");
   const auto& cleaned = out.scans.at("/scan_clean");
   const auto& labels = out.scans.at("/scan_clean_labels");
@@ -79,7 +100,6 @@ TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
     EXPECT_LE(o.first_dynamic_s, o.last_dynamic_s);
   }
   EXPECT_GE(moving, 5);
-  for (const std::string& p : {sim_bag, f.output, c.filter.output}) std::remove(p.c_str());
 }
 
 // The thesis's hall (config/scenarios/thesis_hall.yaml, seed 2: its mapping test): people walk
@@ -88,27 +108,17 @@ TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
 // had taken over a passer-by went with it: 0.61 of the static beams kept. Measured: walls kept
 // 1.0000 online and clean; moving removed 0.936, 0.982; still people removed 0.738, 0.874.
 TEST(CleanJob, TheThesisHallsStandingPeopleGoAndItsPillarsStay) {
-  const sim::Scenario scenario =
-      io::load_scenario(source_path("config/scenarios/thesis_hall.yaml"));
-  const std::string sim_bag = temp_path("thesis_hall_clean_sim.bag");
-  simulate_to_recording(scenario, 2, scenario.duration_s, sim_bag);
   FilterJobOptions f;
-  f.input = sim_bag;
-  f.output = temp_path("thesis_hall_filtered.bag");
   f.config_path = source_path("config/default_masked.yaml");
-  run_filter_job(f);
-  CleanJobOptions c;
-  c.filter = f;
-  c.filter.output = temp_path("thesis_hall_clean.bag");
-  run_clean_job(c);
-  const eval::Rates online = evaluate_bags(sim_bag, f.output);
-  const eval::Rates clean = evaluate_bags(sim_bag, c.filter.output, "/scan_clean");
+  OnlineAndClean run;
+  filter_and_clean("thesis_hall", 2, f, run);
+  const eval::Rates& online = run.online;
+  const eval::Rates& clean = run.clean;
   EXPECT_GE(clean.preservation_rate(), 0.9999);
   EXPECT_GE(clean.rejection_rate(), 0.97);
   EXPECT_GT(clean.rejection_rate(), online.rejection_rate());
   EXPECT_GE(clean.still_removed_rate(), 0.85);
   EXPECT_GT(clean.still_removed_rate(), online.still_removed_rate() + 0.1);
-  for (const std::string& p : {sim_bag, f.output, c.filter.output}) std::remove(p.c_str());
 }
 
 // A real robot among no people (negative_2): every beam removed is a false removal. Cleaned:

@@ -204,6 +204,22 @@ if(NOT scans EQUAL 81 OR NOT static_beams GREATER 0 OR pres LESS 0.99
    OR NOT latency_type STREQUAL "OBJECT" OR NOT f1_type MATCHES "NUMBER|NULL")
   message(FATAL_ERROR "bad evaluation: ${so}")
 endif()
+# --map: the maps from the true poses; the figures are counts of cells and shares of them.
+run_dispel(rc so se eval --truth ${sim} --result ${WORK_DIR}/sim_filtered.bag --json --map
+           --map-resolution 0.1)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "dispel eval --map failed (${rc}): ${se}")
+endif()
+string(JSON map_scans GET "${so}" map scans)
+string(JSON map_res GET "${so}" map resolution_m)
+string(JSON oracle_cells GET "${so}" map oracle_occupied_cells)
+string(JSON raw_wrong GET "${so}" map raw wrongly_occupied_cells)
+string(JSON result_wrong GET "${so}" map result wrongly_occupied_cells)
+string(JSON result_lost GET "${so}" map result lost_share)
+if(NOT map_scans GREATER 75 OR NOT map_res EQUAL 0.1 OR NOT oracle_cells GREATER 0
+   OR result_wrong GREATER raw_wrong OR NOT result_lost GREATER_EQUAL 0)
+  message(FATAL_ERROR "bad map evaluation: ${so}")
+endif()
 
 file(WRITE ${WORK_DIR}/bad_scenario.yaml "lidar: {range_limt_m: 5}\n")
 function(expect_error_no_output expected output)
@@ -223,6 +239,11 @@ expect_error_no_output("no /scan_truth" ${WORK_DIR}/x.bag
                        eval --truth ${BAG} --result ${WORK_DIR}/sim_filtered.bag)
 expect_error_no_output("no /scan_labels or /scan_filtered" ${WORK_DIR}/x.bag
                        eval --truth ${sim} --result ${sim})
+expect_error_no_output("no nav_msgs/Odometry topic /ground_truth.*true poses" ${WORK_DIR}/x.bag
+                       eval --truth ${BAG} --result ${WORK_DIR}/sim_filtered.bag --map)
+expect_error_no_output("map-resolution" ${WORK_DIR}/x.bag
+                       eval --truth ${sim} --result ${WORK_DIR}/sim_filtered.bag --map
+                       --map-resolution 0)
 message(STATUS "dispel sim and eval contract holds")
 
 # dispel odom and dispel eval-trajectory: the simulated run's wheels and IMU against its truth.

@@ -188,6 +188,14 @@ int main(int argc, char** argv) {
   eval_cmd->add_flag("--json", evaluation.json, "Print JSON");
   eval_cmd->add_option("--plot", evaluation.plot,
                        "Also draw the latency histogram and the rates into FILE.png or .svg");
+  eval_cmd->add_flag("--map", evaluation.map,
+                     "Also the map quality: occupancy grids from the true poses, the result's "
+                     "and the unfiltered scans' against the oracle's (cells wrongly occupied, "
+                     "cells lost)");
+  eval_cmd
+      ->add_option("--map-resolution", evaluation.map_resolution_m, "Map cell edge (m) for --map")
+      ->check(dispel::apps::positive_number())
+      ->capture_default_str();
 
   dispel::apps::RenderCommandOptions render;
   std::string render_config;

@@ -35,11 +35,16 @@ int run_render(RenderCommandOptions options) {
   } else {
     std::printf(
         "dispel render: %lld scans from %.1f s to %.1f s%s: %lld points kept, %lld dynamic, %lld "
-        "unknown%s\n",
+        "unknown%s%s\n",
         static_cast<long long>(result.scans_drawn), result.from_s, result.to_s,
         result.labelled ? "" : " (not filtered)", static_cast<long long>(result.points_kept),
         static_cast<long long>(result.points_dynamic),
         static_cast<long long>(result.points_unknown),
+        result.points_moved_later + result.points_vacated > 0
+            ? (", " + std::to_string(result.points_moved_later) + " moved at another time, " +
+               std::to_string(result.points_vacated) + " place seen through")
+                  .c_str()
+            : "",
         result.scans_without_pose > 0
             ? (", " + std::to_string(result.scans_without_pose) + " scans without a pose left out")
                   .c_str()

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "cli_common.hpp"
 #include "dispel/io/scenario_yaml.hpp"
@@ -47,13 +48,20 @@ int run_sim(const SimOptions& o) {
 }
 
 int run_eval(const EvalOptions& o) {
-  eval::Rates r;
+  jobs::Evaluation evaluation;
   try {
-    r = jobs::evaluate_bags(o.truth, o.result, o.scan_topic);
+    std::optional<eval::OccupancyGridConfig> grid;
+    if (o.map) {
+      grid.emplace();
+      grid->resolution_m = o.map_resolution_m;
+    }
+    evaluation = jobs::evaluate_recordings(o.truth, o.result, o.scan_topic, grid);
   } catch (const std::exception& e) {
     std::cerr << "dispel eval: " << error_line(e.what()) << "\n";
     return 1;
   }
+  const eval::Rates& r = evaluation.rates;
+  const std::optional<jobs::MapQuality>& map = evaluation.map;
   if (!o.plot.empty()) {
     try {
       const auto name = [](const std::string& p) { return p.substr(p.find_last_of('/') + 1); };
@@ -80,6 +88,21 @@ int run_eval(const EvalOptions& o) {
                         {"removed", r.still_removed},
                         {"removed_rate", number_or_null(r.still_removed_rate())}}}};
     j["scans"] = r.scans;
+    if (map) {
+      const auto comparison = [](const eval::MapComparison& c) {
+        return nlohmann::ordered_json{
+            {"occupied_cells", c.evaluated_occupied},
+            {"wrongly_occupied_cells", c.wrongly_occupied},
+            {"wrongly_occupied_share", number_or_null(c.wrongly_occupied_share())},
+            {"lost_cells", c.lost},
+            {"lost_share", number_or_null(c.lost_share())}};
+      };
+      j["map"] = {{"resolution_m", map->resolution_m},
+                  {"scans", map->scans},
+                  {"oracle_occupied_cells", map->result.reference_occupied},
+                  {"result", comparison(map->result)},
+                  {"raw", comparison(map->raw)}};
+    }
     std::cout << j.dump(2) << std::endl;
     return 0;
   }
@@ -96,6 +119,20 @@ int run_eval(const EvalOptions& o) {
               static_cast<long long>(r.actors_removed), static_cast<long long>(r.actors_seen));
   std::printf("%-34s %10.4f  (%lld beams; reported, not a target)\n", "still actors removed",
               r.still_removed_rate(), static_cast<long long>(r.still_beams));
+  if (map) {
+    std::printf(
+        "map (%.2f m cells, %lld scans from the true poses): the oracle's scans occupy "
+        "%lld cells\n",
+        map->resolution_m, static_cast<long long>(map->scans),
+        static_cast<long long>(map->result.reference_occupied));
+    const auto line = [](const char* name, const eval::MapComparison& c) {
+      std::printf("%-34s %10.4f  (%lld cells; %lld lost, %.4f)\n", name, c.wrongly_occupied_share(),
+                  static_cast<long long>(c.wrongly_occupied), static_cast<long long>(c.lost),
+                  c.lost_share());
+    };
+    line("map cells wrongly occupied", map->result);
+    line("... unfiltered scans", map->raw);
+  }
   return 0;
 }
 

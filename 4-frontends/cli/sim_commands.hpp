@@ -20,6 +20,8 @@ struct EvalOptions {
   std::string scan_topic = "/scan";
   bool json = false;
   std::string plot;  ///< Also draw the evaluation into this .png or .svg (empty: no picture).
+  bool map = false;  ///< Also the map quality (jobs::MapQuality).
+  double map_resolution_m = 0.05;
 };
 int run_eval(const EvalOptions& options);
 

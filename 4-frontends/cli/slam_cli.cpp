@@ -89,6 +89,9 @@ void add_slam_commands(CLI::App& app, SlamCli& cli) {
       ->add_option("--particles", cli.experiment.job.particles, "With --localization: particles")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
+  cli.experiment_cmd->add_flag(
+      "--clean", cli.experiment.job.clean,
+      "Also run dispel clean (the offline filter) and SLAM on its output: the variant cleaned");
   cli.experiment_cmd->add_flag("--keep-bags", cli.experiment.job.keep_bags,
                                "Keep the bags of each seed under OUT/bags/ (needs --out)");
 }

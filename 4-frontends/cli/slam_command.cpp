@@ -159,6 +159,11 @@ nlohmann::ordered_json summary_json(const slam::ExperimentResult& r,
     if (s.preservation_rate.count > 0) {
       v["preservation_rate"] = statistic_json(s.preservation_rate);
       v["rejection_rate"] = statistic_json(s.rejection_rate);
+      v["still_removed_rate"] = statistic_json(s.still_removed_rate);
+    }
+    if (s.map_wrongly_occupied_share.count > 0) {
+      v["map"] = {{"wrongly_occupied_share", statistic_json(s.map_wrongly_occupied_share)},
+                  {"lost_share", statistic_json(s.map_lost_share)}};
     }
     const char* name = slam::variant_name(s.variant);
     if (slam::is_localization_variant(s.variant)) {
@@ -208,6 +213,13 @@ nlohmann::ordered_json runs_json(const slam::ExperimentResult& r) {
         run.against_full_range ? errors_json(*run.against_full_range) : nlohmann::ordered_json();
     j["preservation_rate"] = number_or_null(run.preservation_rate);
     j["rejection_rate"] = number_or_null(run.rejection_rate);
+    j["still_removed_rate"] = number_or_null(run.still_removed_rate);
+    j["map"] = run.map
+                   ? nlohmann::ordered_json{{"oracle_occupied_cells", run.map->reference_occupied},
+                                            {"occupied_cells", run.map->evaluated_occupied},
+                                            {"wrongly_occupied_cells", run.map->wrongly_occupied},
+                                            {"lost_cells", run.map->lost}}
+                   : nlohmann::ordered_json();
     runs.push_back(j);
   }
   return {{"scenario", r.scenario_name}, {"runs", runs}};
@@ -228,7 +240,8 @@ void write_outputs(const std::string& dir, const slam::ExperimentResult& r,
                  "seed,variant,rmse_position_m,rmse_x_m,rmse_y_m,rmse_yaw_rad,"
                  "max_position_error_m,max_yaw_error_rad,final_position_error_m,diverged,"
                  "full_range_rmse_x_m,full_range_rmse_y_m,full_range_rmse_yaw_rad,"
-                 "preservation_rate,rejection_rate\n");
+                 "preservation_rate,rejection_rate,still_removed_rate,oracle_occupied_cells,"
+                 "wrongly_occupied_cells,lost_cells\n");
     for (const slam::ExperimentRun& run : r.runs) {
       const eval::TrajectoryErrors& e = run.against_truth;
       std::fprintf(f, "%llu,%s,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,",
@@ -242,10 +255,19 @@ void write_outputs(const std::string& dir, const slam::ExperimentResult& r,
       } else {
         std::fprintf(f, ",,,");
       }
-      if (std::isfinite(run.preservation_rate)) {
-        std::fprintf(f, "%.6f,%.6f\n", run.preservation_rate, run.rejection_rate);
+      const auto rate = [f](double v, const char* end) {
+        if (std::isfinite(v)) std::fprintf(f, "%.6f", v);
+        std::fputs(end, f);
+      };
+      rate(run.preservation_rate, ",");
+      rate(run.rejection_rate, ",");
+      rate(run.still_removed_rate, ",");
+      if (run.map) {
+        std::fprintf(f, "%lld,%lld,%lld\n", static_cast<long long>(run.map->reference_occupied),
+                     static_cast<long long>(run.map->wrongly_occupied),
+                     static_cast<long long>(run.map->lost));
       } else {
-        std::fprintf(f, ",\n");
+        std::fprintf(f, ",,\n");
       }
     }
     const bool ok = std::fflush(f) == 0 && std::ferror(f) == 0;
@@ -301,24 +323,35 @@ void print_tables(const slam::ExperimentResult& r, const std::vector<slam::Varia
                 mean_std(s.max_position_error_m, 1.0, 3).c_str(), s.diverged, s.runs);
   }
   std::printf("\nThe thesis's protocol (its Table 4.1): RMSE against the full-range SLAM run\n\n");
-  std::printf("%-13s %-17s %-17s %-15s\n", "variant", "x (m)", "y (m)", "yaw (deg)");
+  std::printf("%-14s %-17s %-17s %-15s\n", "variant", "x (m)", "y (m)", "yaw (deg)");
   for (const slam::VariantSummary& s : summary) {
     if (!slam::is_cut_slam_variant(s.variant)) continue;
-    std::printf("%-13s %-17s %-17s %-15s\n", slam::variant_name(s.variant),
+    std::printf("%-14s %-17s %-17s %-15s\n", slam::variant_name(s.variant),
                 mean_std(s.full_range_rmse_x_m, 1.0, 3).c_str(),
                 mean_std(s.full_range_rmse_y_m, 1.0, 3).c_str(),
                 mean_std(s.full_range_rmse_yaw_rad, kRadToDeg, 2).c_str());
   }
+  std::printf(
+      "\nThe maps: each run's occupancy grid against oracle_static's (no people; cells matched "
+      "within 0.1 m),\nas shares of its occupied cells, mean ± std over seeds\n\n");
+  std::printf("%-14s %-21s %-17s\n", "variant", "wrongly occupied", "lost");
   for (const slam::VariantSummary& s : summary) {
-    if (s.variant != slam::Variant::kFilteredPoi && s.variant != slam::Variant::kFilteredPog) {
-      continue;
-    }
-    std::printf("\n%s: the filter kept %.4f of the static beams", slam::variant_name(s.variant),
+    if (s.map_wrongly_occupied_share.count == 0) continue;
+    std::printf("%-14s %-21s %-17s\n", slam::variant_name(s.variant),
+                mean_std(s.map_wrongly_occupied_share, 1.0, 4).c_str(),
+                mean_std(s.map_lost_share, 1.0, 4).c_str());
+  }
+  for (const slam::VariantSummary& s : summary) {
+    if (s.preservation_rate.count == 0) continue;
+    std::printf("\n%s: kept %.4f of the static beams", slam::variant_name(s.variant),
                 s.preservation_rate.mean);
     if (s.rejection_rate.count > 0) {
-      std::printf(" and removed %.4f of the moving", s.rejection_rate.mean);
+      std::printf(", removed %.4f of the moving", s.rejection_rate.mean);
     } else {
       std::printf("; nothing moved");
+    }
+    if (s.still_removed_rate.count > 0) {
+      std::printf(" and %.4f of those of people standing still", s.still_removed_rate.mean);
     }
   }
   std::printf("\n");

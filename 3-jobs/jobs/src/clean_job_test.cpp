@@ -20,11 +20,13 @@ using test::source_path;
 using test::temp_path;
 
 // A scenario simulated with @p seed, filtered online and cleaned offline with @p filter's options
-// (input and outputs set here), both evaluated against the simulator's ground truth.
+// (input and outputs set here), both evaluated against the simulator's ground truth, beam by beam
+// and as maps (occupancy grids from the true poses, against the one without people).
 struct OnlineAndClean {
   std::string sim_bag, filtered_bag, clean_bag;
   CleanJobStats stats;
   eval::Rates online, clean;
+  MapQuality online_map, clean_map;
   ~OnlineAndClean() {
     for (const std::string& p : {sim_bag, filtered_bag, clean_bag}) std::remove(p.c_str());
   }
@@ -45,8 +47,32 @@ void filter_and_clean(const std::string& scenario_name, std::uint64_t seed, Filt
   c.filter = filter;
   c.filter.output = out.clean_bag;
   out.stats = run_clean_job(c);
-  out.online = evaluate_bags(out.sim_bag, out.filtered_bag);
-  out.clean = evaluate_bags(out.sim_bag, out.clean_bag, "/scan_clean");
+  const Evaluation online =
+      evaluate_recordings(out.sim_bag, out.filtered_bag, "/scan", eval::OccupancyGridConfig{});
+  const Evaluation clean =
+      evaluate_recordings(out.sim_bag, out.clean_bag, "/scan_clean", eval::OccupancyGridConfig{});
+  out.online = online.rates;
+  out.clean = clean.rates;
+  out.online_map = *online.map;
+  out.clean_map = *clean.map;
+  // The map figures of each evaluation are those of the same oracle and raw maps.
+  EXPECT_EQ(out.online_map.raw.wrongly_occupied, out.clean_map.raw.wrongly_occupied);
+  EXPECT_EQ(out.online_map.result.reference_occupied, out.clean_map.result.reference_occupied);
+  // Every scan but the last (whose last beams come after the last true pose) is in the maps.
+  EXPECT_GE(out.online_map.scans, out.stats.scans - 1);
+  // Neither filter takes a wall out of the map; neither adds a cell to it.
+  EXPECT_LE(out.clean_map.result.lost_share(), 0.001);
+  EXPECT_LE(out.online_map.result.lost_share(), 0.001);
+  EXPECT_LE(out.clean_map.result.wrongly_occupied, out.clean_map.raw.wrongly_occupied);
+  std::printf(
+      "map cells wrongly occupied of %lld: raw %lld, online %lld, clean %lld; lost: online "
+      "%lld, clean %lld\n",
+      static_cast<long long>(out.clean_map.result.reference_occupied),
+      static_cast<long long>(out.clean_map.raw.wrongly_occupied),
+      static_cast<long long>(out.online_map.result.wrongly_occupied),
+      static_cast<long long>(out.clean_map.result.wrongly_occupied),
+      static_cast<long long>(out.online_map.result.lost),
+      static_cast<long long>(out.clean_map.result.lost));
 }
 
 // People who stand for 10-20 s and then walk off (config/scenarios/stand_then_leave.yaml, seed
@@ -119,6 +145,10 @@ TEST(CleanJob, TheThesisHallsStandingPeopleGoAndItsPillarsStay) {
   EXPECT_GT(clean.rejection_rate(), online.rejection_rate());
   EXPECT_GE(clean.still_removed_rate(), 0.85);
   EXPECT_GT(clean.still_removed_rate(), online.still_removed_rate() + 0.1);
+  // The map from the true poses: of the 38 cells the pillars occupy, the people add 22 to the
+  // unfiltered scans' map and 2 to either filter's (the rays through their places clear the rest).
+  EXPECT_GT(run.clean_map.raw.wrongly_occupied, 5 * run.clean_map.result.wrongly_occupied);
+  EXPECT_LE(run.clean_map.result.wrongly_occupied, run.online_map.result.wrongly_occupied);
 }
 
 // A real robot among no people (negative_2): every beam removed is a false removal. Cleaned:

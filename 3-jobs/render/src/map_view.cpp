@@ -83,7 +83,27 @@ void for_each_point(const LaserScan& scan, const Pose2& pose, Fn&& fn) {
   }
 }
 
-enum PointClass : int { kKeptClass = 0, kDynamicClass = 1, kUnknownClass = 2, kClassCount = 3 };
+// A point's class by its label: dispel filter's (1 dynamic, 2 unknown) or dispel clean's, which
+// adds two removed ones (5 moved at another time, 6 place seen through); every other label is kept.
+enum PointClass : int {
+  kKeptClass = 0,
+  kDynamicClass = 1,
+  kUnknownClass = 2,
+  kMovedLaterClass = 3,
+  kVacatedClass = 4,
+  kClassCount = 5
+};
+
+PointClass point_class(float label) {
+  if (label == 1.0F) return kDynamicClass;
+  if (label == 2.0F) return kUnknownClass;
+  if (label == 5.0F) return kMovedLaterClass;
+  if (label == 6.0F) return kVacatedClass;
+  return kKeptClass;
+}
+
+constexpr Rgb kRemovedColours[kClassCount] = {colours::kKept, colours::kDynamic, colours::kUnknown,
+                                              colours::kMovedLater, colours::kVacated};
 
 std::uint32_t pixel_value(Rgb c) {
   return 0xFF000000U | (static_cast<std::uint32_t>(c.r) << 16) |
@@ -107,11 +127,13 @@ Rgb kept_shade(std::uint32_t hits) {
 class PointRaster {
  public:
   PointRaster(int w, int h)
-      : w_(w), h_(h), counts_(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 3, 0) {}
+      : w_(w),
+        h_(h),
+        counts_(static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * kClassCount, 0) {}
 
   void add(int col, int row, PointClass c) {
     if (col < 0 || row < 0 || col >= w_ || row >= h_) return;
-    std::uint32_t& n = counts_[index(col, row) * 3 + static_cast<std::size_t>(c)];
+    std::uint32_t& n = counts_[index(col, row) * kClassCount + static_cast<std::size_t>(c)];
     if (n < std::numeric_limits<std::uint32_t>::max()) ++n;
   }
 
@@ -131,10 +153,16 @@ class PointRaster {
     std::vector<std::pair<int, int>> removed;
     for (int row = 0; row < h_; ++row) {
       for (int col = 0; col < w_; ++col) {
-        const std::uint32_t* n = &counts_[index(col, row) * 3];
-        if (n[0] == 0 && n[1] == 0 && n[2] == 0) continue;
-        if (n[1] + n[2] >= n[0]) {
-          px(col, row) = pixel_value(n[1] >= n[2] ? colours::kDynamic : colours::kUnknown);
+        const std::uint32_t* n = &counts_[index(col, row) * kClassCount];
+        std::uint64_t removed_here = 0;
+        int most = kDynamicClass;
+        for (int c = kDynamicClass; c < kClassCount; ++c) {
+          removed_here += n[c];
+          if (n[c] > n[most]) most = c;
+        }
+        if (n[kKeptClass] == 0 && removed_here == 0) continue;
+        if (removed_here >= n[kKeptClass]) {
+          px(col, row) = pixel_value(kRemovedColours[most]);
           removed.emplace_back(col, row);
         } else {
           px(col, row) = pixel_value(kept_shade(n[0]));
@@ -249,15 +277,11 @@ RenderResult render_map(const Scene& scene, const RenderOptions& o,
       [&](const LaserScan& scan, const Pose2& pose) {
         const bool has_labels = result.labelled && scan.intensities.size() == scan.size();
         for_each_point(scan, pose, [&](const Eigen::Vector2d& p, std::size_t i) {
-          PointClass c = kKeptClass;
-          if (has_labels) {
-            const float label = scan.intensities[i];
-            if (label == 1.0F) c = kDynamicClass;
-            if (label == 2.0F) c = kUnknownClass;
-          }
-          (c == kKeptClass
-               ? result.points_kept
-               : (c == kDynamicClass ? result.points_dynamic : result.points_unknown))++;
+          const PointClass c = has_labels ? point_class(scan.intensities[i]) : kKeptClass;
+          std::int64_t* counts[kClassCount] = {&result.points_kept, &result.points_dynamic,
+                                               &result.points_unknown, &result.points_moved_later,
+                                               &result.points_vacated};
+          ++*counts[c];
           const Eigen::Vector2d px = t.to_pixel(p);
           raster.add(static_cast<int>(std::floor(px.x())) - l.plot_x,
                      static_cast<int>(std::floor(px.y())) - l.plot_y, c);
@@ -307,19 +331,29 @@ RenderResult render_map(const Scene& scene, const RenderOptions& o,
   }
   draw_text(cr, l.plot_x, l.subtitle_y, sub, 0.9 * f, TextAlign::kLeft, false, {80, 80, 80});
   double x = l.plot_x;
-  if (result.labelled) {
+  // dispel clean's labels take two more swatches: the legend's texts are shorter then.
+  const bool cleaned = result.points_moved_later + result.points_vacated > 0;
+  if (result.labelled && !cleaned) {
     x = legend_swatch(cr, x, l.legend_y, f, colours::kKept, "kept");
     x = legend_swatch(cr, x, l.legend_y, f, colours::kDynamic, "removed: dynamic (label 1)");
     x = legend_swatch(cr, x, l.legend_y, f, colours::kUnknown, "removed: unknown (label 2)");
+  } else if (cleaned) {
+    x = legend_swatch(cr, x, l.legend_y, f, colours::kKept, "kept");
+    x = legend_swatch(cr, x, l.legend_y, f, colours::kDynamic, "removed: dynamic (1)");
+    x = legend_swatch(cr, x, l.legend_y, f, colours::kUnknown, "unknown (2)");
+    x = legend_swatch(cr, x, l.legend_y, f, colours::kMovedLater, "moved at another time (5)");
+    x = legend_swatch(cr, x, l.legend_y, f, colours::kVacated, "seen through (6)");
   } else {
     x = legend_swatch(cr, x, l.legend_y, f, colours::kKept,
                       "points (not filtered: no " + labels_topic + ")");
   }
   if (!path.empty()) x = legend_line(cr, x, l.legend_y, f, colours::kTrajectory, "robot path");
-  const std::int64_t removed = result.points_dynamic + result.points_unknown;
+  const std::int64_t removed = result.points_dynamic + result.points_unknown +
+                               result.points_moved_later + result.points_vacated;
   draw_text(cr, canvas.width() - l.plot_x, l.legend_y,
-            "grey \u2192 black: hit more often; " + std::to_string(removed) + " of " +
-                std::to_string(removed + result.points_kept) + " points removed",
+            std::string(cleaned ? "" : "grey \u2192 black: hit more often; ") +
+                std::to_string(removed) + " of " + std::to_string(removed + result.points_kept) +
+                " points removed",
             0.9 * f, TextAlign::kRight, false, {80, 80, 80});
   (void)x;
   canvas.commit();

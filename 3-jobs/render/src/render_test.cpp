@@ -113,6 +113,9 @@ const Pose2 kMount{0.2, 0.0, 0.1};
 struct MapBagOptions {
   bool labels = true;  // Write /scan_labels as dispel filter does: the person's beams label 1.
   bool odometry = true;
+  // dispel clean's output instead: /scan_clean and /scan_clean_labels, the person's beams label 5
+  // in the first 25 scans and 6 in the last 15, the pillar's 7 (restored, kept).
+  bool cleaned = false;
 };
 
 // The robot drives along x at 0.5 m/s for 4 s (40 scans at 10 Hz), with odometry on /odom and
@@ -140,14 +143,17 @@ std::string write_map_bag(const std::string& name, const MapBagOptions& opt) {
     LaserScan scan = sim::raycast(hall(), base * kMount, g, &hit);
     scan.stamp_s = t;
     sensor_msgs::LaserScan msg = to_ros(scan, "laser");
-    bag.write("/scan", msg.header.stamp, msg);
+    const std::string topic = opt.cleaned ? "/scan_clean" : "/scan";
+    bag.write(topic, msg.header.stamp, msg);
     if (opt.labels) {
       msg.intensities.assign(msg.ranges.size(), 0.0F);
       for (std::size_t i = 0; i < hit.size(); ++i) {
-        if (hit[i] == kPersonShape) msg.intensities[i] = 1.0F;
+        if (hit[i] == kPersonShape)
+          msg.intensities[i] = opt.cleaned ? (k < 25 ? 5.0F : 6.0F) : 1.0F;
+        if (hit[i] == 4 && opt.cleaned) msg.intensities[i] = 7.0F;
         if (hit[i] == sim::kNoHit) msg.intensities[i] = 4.0F;
       }
-      bag.write("/scan_labels", msg.header.stamp, msg);
+      bag.write(topic + "_labels", msg.header.stamp, msg);
     }
   }
   return path;
@@ -220,6 +226,32 @@ TEST(RenderMap, RemovedPointIsDynamicColourWallIsGreyBackgroundElsewhere) {
   const double hall_px = r.transform.scale_px_per_m * 20.0;
   EXPECT_GT(hall_px, 700.0);
   EXPECT_LT(hall_px, 900.0);
+  std::remove(o.input.c_str());
+  std::remove(o.output.c_str());
+}
+
+// dispel clean's labels: each removed reason in its colour, a restored point (7) kept.
+TEST(RenderMap, CleanedBagDrawsEachReasonForRemovalInItsColour) {
+  MapBagOptions b;
+  b.cleaned = true;
+  RenderOptions o = map_options(write_map_bag("cleaned.bag", b), temp_path("cleaned.png"));
+  o.scan_topic = "/scan_clean";
+  const RenderResult r = render_bag(o);
+  EXPECT_TRUE(r.labelled);
+  EXPECT_EQ(r.points_dynamic + r.points_unknown, 0);
+  EXPECT_GT(r.points_moved_later, 25 * 10);
+  EXPECT_GT(r.points_vacated, 15 * 10);
+  const Picture pic(o.output);
+  ASSERT_TRUE(pic.ok());
+  // The person: moved at another time in 25 scans, seen through in 15; the pixel takes the more
+  // frequent reason.
+  const auto [beam, range] = middle_beam_on(0, kPersonShape);
+  EXPECT_EQ(pic.at(r.transform.to_pixel(map_point(0, beam, range))), colours::kMovedLater);
+  // The pillar, restored: grey to black.
+  const auto [pillar_beam, pillar_range] = middle_beam_on(20, 4);
+  const Rgb pillar = pic.at(r.transform.to_pixel(map_point(20, pillar_beam, pillar_range)));
+  EXPECT_TRUE(pillar.r == pillar.g && pillar.g == pillar.b && pillar.r <= colours::kKeptFaint.r)
+      << describe(pillar);
   std::remove(o.input.c_str());
   std::remove(o.output.c_str());
 }

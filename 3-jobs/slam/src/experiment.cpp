@@ -11,6 +11,7 @@
 
 #include "dispel/io/config_yaml.hpp"
 #include "dispel/io/scenario_yaml.hpp"
+#include "dispel/jobs/clean_job.hpp"
 #include "dispel/jobs/eval_job.hpp"
 #include "dispel/jobs/filter_job.hpp"
 #include "dispel/jobs/sim_job.hpp"
@@ -67,12 +68,13 @@ sim::SimulationOutput cut_range(const sim::SimulationOutput& full, double limit_
   return cut;
 }
 
-// The oracle: exactly the beams on moving actors removed (NaN, as `dispel filter` removes them).
-sim::SimulationOutput remove_moving(const sim::SimulationOutput& run) {
+// The oracle: exactly the beams on moving actors removed (NaN, as `dispel filter` removes them),
+// and with @p still_too those on actors standing still as well.
+sim::SimulationOutput remove_actors(const sim::SimulationOutput& run, bool still_too) {
   sim::SimulationOutput oracle = run;
   for (sim::ScanFrame& f : oracle.scans) {
     for (std::size_t i = 0; i < f.scan.ranges_m.size(); ++i) {
-      if (f.truth[i] == sim::Truth::kMoving) {
+      if (f.truth[i] == sim::Truth::kMoving || (still_too && f.truth[i] == sim::Truth::kStill)) {
         f.scan.ranges_m[i] = std::numeric_limits<float>::quiet_NaN();
       }
     }
@@ -134,7 +136,24 @@ Statistic statistic(std::vector<double> v) {
   return s;
 }
 
+// Cells of two SLAM runs' grids match when their centres are this close: two cells, about the
+// position error of a SLAM run that did not diverge here (0.02-0.06 m RMSE on the thesis hall).
+constexpr double kMapToleranceM = 0.1;
+
 }  // namespace
+
+const Variant kTableOrder[kVariantCount] = {Variant::kRaw,
+                                            Variant::kFilteredPoi,
+                                            Variant::kFilteredPog,
+                                            Variant::kCleaned,
+                                            Variant::kOracle,
+                                            Variant::kOracleStatic,
+                                            Variant::kFullRange,
+                                            Variant::kOdometry,
+                                            Variant::kLocalizationRaw,
+                                            Variant::kLocalizationFilteredPoi,
+                                            Variant::kLocalizationFilteredPog,
+                                            Variant::kLocalizationOracle};
 
 const char* variant_name(Variant v) {
   switch (v) {
@@ -158,13 +177,17 @@ const char* variant_name(Variant v) {
       return "localization_filtered_pog";
     case Variant::kLocalizationOracle:
       return "localization_oracle";
+    case Variant::kCleaned:
+      return "cleaned";
+    case Variant::kOracleStatic:
+      return "oracle_static";
   }
   return "?";
 }
 
 bool is_cut_slam_variant(Variant v) {
   return v == Variant::kRaw || v == Variant::kFilteredPoi || v == Variant::kFilteredPog ||
-         v == Variant::kOracle;
+         v == Variant::kCleaned || v == Variant::kOracle || v == Variant::kOracleStatic;
 }
 
 bool is_localization_variant(Variant v) {
@@ -205,7 +228,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProg
     const sim::SimulationOutput cut = cut_range(full, scenario.lidar.range_limit_m);
     jobs::write_simulation(full, full_scenario, bag("full_range"));
     jobs::write_simulation(cut, scenario, bag("raw"));
-    jobs::write_simulation(remove_moving(cut), scenario, bag("oracle"));
+    jobs::write_simulation(remove_actors(cut, false), scenario, bag("oracle"));
+    jobs::write_simulation(remove_actors(cut, true), scenario, bag("oracle_static"));
     jobs::FilterJobOptions filter;
     filter.input = bag("raw");
     filter.output = bag("filtered_poi");
@@ -214,12 +238,20 @@ ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProg
     filter.output = bag("filtered_pog");
     filter.config = pog;
     jobs::run_filter_job(filter);
+    if (o.clean) {
+      jobs::CleanJobOptions clean;
+      clean.filter = filter;
+      clean.filter.config = poi;
+      clean.filter.output = bag("cleaned");
+      jobs::run_clean_job(clean);
+    }
     result.truth.push_back(truth_at_scans(cut));
     const std::vector<eval::TrajectoryPoint>& truth = result.truth.back();
 
     // SLAM on each; full range first, as the others are compared with it.
-    const Variant order[] = {Variant::kFullRange, Variant::kRaw, Variant::kFilteredPoi,
-                             Variant::kFilteredPog, Variant::kOracle};
+    std::vector<Variant> order = {Variant::kFullRange,   Variant::kRaw,    Variant::kFilteredPoi,
+                                  Variant::kFilteredPog, Variant::kOracle, Variant::kOracleStatic};
+    if (o.clean) order.push_back(Variant::kCleaned);
     std::vector<ExperimentRun> runs(kVariantCount);
     std::vector<char> ran(kVariantCount, 0);
     std::vector<eval::TrajectoryPoint> odometry;
@@ -227,18 +259,26 @@ ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProg
     // The filter's rates on this seed, once per filtered bag (SLAM and localisation share them).
     const eval::Rates poi_rates = jobs::evaluate_bags(bag("raw"), bag("filtered_poi"));
     const eval::Rates pog_rates = jobs::evaluate_bags(bag("raw"), bag("filtered_pog"));
+    const eval::Rates clean_rates =
+        o.clean ? jobs::evaluate_bags(bag("raw"), bag("cleaned"), "/scan_clean") : eval::Rates{};
     const auto rates_of = [&](Variant v, ExperimentRun& run) {
-      run.preservation_rate = run.rejection_rate = std::numeric_limits<double>::quiet_NaN();
-      if (v == Variant::kFilteredPoi || v == Variant::kFilteredPog) {
-        const eval::Rates& rates = v == Variant::kFilteredPoi ? poi_rates : pog_rates;
+      run.preservation_rate = run.rejection_rate = run.still_removed_rate =
+          std::numeric_limits<double>::quiet_NaN();
+      if (v == Variant::kFilteredPoi || v == Variant::kFilteredPog || v == Variant::kCleaned) {
+        const eval::Rates& rates = v == Variant::kFilteredPoi
+                                       ? poi_rates
+                                       : (v == Variant::kFilteredPog ? pog_rates : clean_rates);
         run.preservation_rate = rates.preservation_rate();
         run.rejection_rate = rates.rejection_rate();
+        run.still_removed_rate = rates.still_removed_rate();
       }
     };
     const auto scan_topic = [](Variant v) {
+      if (v == Variant::kCleaned) return "/scan_clean";
       return (v == Variant::kFilteredPoi || v == Variant::kFilteredPog) ? "/scan_filtered"
                                                                         : "/scan";
     };
+    std::vector<GridMap> grids(kVariantCount);
     for (Variant v : order) {
       SlamOptions slam;
       slam.input = bag(variant_name(v));
@@ -252,7 +292,14 @@ ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProg
       run.trajectory = std::move(r.trajectory);
       rates_of(v, run);
       if (v == Variant::kRaw) odometry = std::move(r.odometry);
-      if (v == Variant::kOracle) map = std::move(r.grid);
+      grids[static_cast<std::size_t>(v)] = std::move(r.grid);
+    }
+    map = grids[static_cast<std::size_t>(Variant::kOracle)];
+    const GridMap& no_people = grids[static_cast<std::size_t>(Variant::kOracleStatic)];
+    for (Variant v : order) {
+      if (!is_cut_slam_variant(v)) continue;
+      runs[static_cast<std::size_t>(v)].map =
+          compare_grid_maps(no_people, grids[static_cast<std::size_t>(v)], kMapToleranceM);
     }
     ExperimentRun& odo = runs[static_cast<std::size_t>(Variant::kOdometry)];
     ran[static_cast<std::size_t>(Variant::kOdometry)] = 1;
@@ -284,7 +331,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProg
     }
 
     const auto& reference = runs[static_cast<std::size_t>(Variant::kFullRange)].trajectory;
-    for (std::size_t i = 0; i < runs.size(); ++i) {
+    for (const Variant v : kTableOrder) {
+      const auto i = static_cast<std::size_t>(v);
       if (ran[i] == 0) continue;
       ExperimentRun& run = runs[i];
       run.against_truth = compare(truth, run.trajectory);
@@ -306,9 +354,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProg
 
 std::vector<VariantSummary> summarise(const ExperimentResult& result) {
   std::vector<VariantSummary> out;
-  for (int i = 0; i < kVariantCount; ++i) {
-    const auto v = static_cast<Variant>(i);
-    std::vector<double> p, x, y, yaw, worst, fx, fy, fyaw, pres, rej;
+  for (const Variant v : kTableOrder) {
+    std::vector<double> p, x, y, yaw, worst, fx, fy, fyaw, pres, rej, still, wrong, lost;
     VariantSummary s;
     s.variant = v;
     for (const ExperimentRun& r : result.runs) {
@@ -327,6 +374,11 @@ std::vector<VariantSummary> summarise(const ExperimentResult& result) {
       }
       if (std::isfinite(r.preservation_rate)) pres.push_back(r.preservation_rate);
       if (std::isfinite(r.rejection_rate)) rej.push_back(r.rejection_rate);
+      if (std::isfinite(r.still_removed_rate)) still.push_back(r.still_removed_rate);
+      if (r.map && std::isfinite(r.map->wrongly_occupied_share())) {
+        wrong.push_back(r.map->wrongly_occupied_share());
+        lost.push_back(r.map->lost_share());
+      }
     }
     if (s.runs == 0) continue;
     s.rmse_position_m = statistic(p);
@@ -339,6 +391,9 @@ std::vector<VariantSummary> summarise(const ExperimentResult& result) {
     s.full_range_rmse_yaw_rad = statistic(fyaw);
     s.preservation_rate = statistic(pres);
     s.rejection_rate = statistic(rej);
+    s.still_removed_rate = statistic(still);
+    s.map_wrongly_occupied_share = statistic(wrong);
+    s.map_lost_share = statistic(lost);
     out.push_back(s);
   }
   return out;

@@ -14,6 +14,8 @@
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <unordered_map>
+#include <vector>
 
 #include "dispel/io/atomic_file.hpp"
 #include "dispel/io/text.hpp"
@@ -181,6 +183,77 @@ std::string quoted(const std::string& s) {
 }
 
 }  // namespace
+
+namespace {
+
+// The centres of @p map's occupied cells in its frame.
+std::vector<Eigen::Vector2d> occupied_centres(const GridMap& map) {
+  std::vector<Eigen::Vector2d> out;
+  for (int row = 0; row < map.height; ++row) {
+    for (int col = 0; col < map.width; ++col) {
+      if (map.at(col, row) < kSaverOccupiedPercent) continue;
+      out.push_back(
+          map.origin.apply({(col + 0.5) * map.resolution_m, (row + 0.5) * map.resolution_m}));
+    }
+  }
+  return out;
+}
+
+// Points in square buckets of the tolerance's size: a point within the tolerance of a query lies
+// in the query's bucket or one of its eight neighbours.
+class PointBuckets {
+ public:
+  PointBuckets(const std::vector<Eigen::Vector2d>& points, double tolerance_m)
+      : bucket_m_(std::max(tolerance_m, 1e-6)), tolerance_m_(tolerance_m) {
+    for (const Eigen::Vector2d& p : points)
+      buckets_[key(bucket(p.x()), bucket(p.y()))].push_back(p);
+  }
+  bool has_near(const Eigen::Vector2d& q) const {
+    const std::int64_t bx = bucket(q.x()), by = bucket(q.y());
+    for (std::int64_t dx = -1; dx <= 1; ++dx) {
+      for (std::int64_t dy = -1; dy <= 1; ++dy) {
+        const auto it = buckets_.find(key(bx + dx, by + dy));
+        if (it == buckets_.end()) continue;
+        for (const Eigen::Vector2d& p : it->second) {
+          if ((p - q).norm() <= tolerance_m_) return true;
+        }
+      }
+    }
+    return false;
+  }
+
+ private:
+  std::int64_t bucket(double v) const {
+    return static_cast<std::int64_t>(std::floor(v / bucket_m_));
+  }
+  static std::uint64_t key(std::int64_t x, std::int64_t y) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(x)) << 32) |
+           static_cast<std::uint32_t>(y);
+  }
+  double bucket_m_, tolerance_m_;
+  std::unordered_map<std::uint64_t, std::vector<Eigen::Vector2d>> buckets_;
+};
+
+}  // namespace
+
+eval::MapComparison compare_grid_maps(const GridMap& reference, const GridMap& evaluated,
+                                      double tolerance_m) {
+  reference.validate();
+  evaluated.validate();
+  if (!std::isfinite(tolerance_m) || tolerance_m < 0.0) {
+    throw jobs::JobError("map comparison: the tolerance " + std::to_string(tolerance_m) +
+                         " m must be finite and not negative");
+  }
+  const std::vector<Eigen::Vector2d> ref = occupied_centres(reference);
+  const std::vector<Eigen::Vector2d> got = occupied_centres(evaluated);
+  const PointBuckets ref_buckets(ref, tolerance_m), got_buckets(got, tolerance_m);
+  eval::MapComparison out;
+  out.reference_occupied = static_cast<std::int64_t>(ref.size());
+  out.evaluated_occupied = static_cast<std::int64_t>(got.size());
+  for (const Eigen::Vector2d& p : got) out.wrongly_occupied += ref_buckets.has_near(p) ? 0 : 1;
+  for (const Eigen::Vector2d& p : ref) out.lost += got_buckets.has_near(p) ? 0 : 1;
+  return out;
+}
 
 std::int64_t GridMap::occupied_cells() const {
   std::int64_t n = 0;

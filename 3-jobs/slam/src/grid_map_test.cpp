@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -208,6 +209,72 @@ TEST(SlamGridMapBadInput, InvalidMapsAreNotWritten) {
   expect_refused(m, "map cell value 101");
   expect_refused(GridMap{}, "it has none");
   EXPECT_THROW(write_map_yaml(small_map(), temp_path("no_such_folder/map.yaml")), JobError);
+}
+
+}  // namespace
+}  // namespace dispel::slam
+
+namespace dispel::slam {
+namespace {
+
+// An empty (free) map of @p width x @p height cells of @p resolution_m at @p origin, with the
+// cells whose centres lie within 0.01 m of the segment from @p a to @p b occupied.
+GridMap map_with_line(double resolution_m, const Pose2& origin, int width, int height,
+                      const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  GridMap m;
+  m.resolution_m = resolution_m;
+  m.origin = origin;
+  m.width = width;
+  m.height = height;
+  m.cells.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);
+  const Pose2 to_grid = origin.inverse();
+  for (int k = 0; k <= 1000; ++k) {
+    const Eigen::Vector2d p = to_grid.apply(a + (b - a) * (k / 1000.0));
+    const int col = static_cast<int>(std::floor(p.x() / resolution_m));
+    const int row = static_cast<int>(std::floor(p.y() / resolution_m));
+    if (col >= 0 && row >= 0 && col < width && row < height) {
+      m.cells[static_cast<std::size_t>(row) * static_cast<std::size_t>(width) +
+              static_cast<std::size_t>(col)] = 100;
+    }
+  }
+  return m;
+}
+
+// Two SLAM runs' maps of one wall: their grids have their own origins; a person kept in one of
+// them is wrongly occupied, a stretch of wall missing is lost.
+TEST(CompareGridMaps, MatchesCellsWithinTheToleranceAcrossDifferentGrids) {
+  const GridMap oracle = map_with_line(0.05, {-1.0, -1.0, 0.0}, 80, 80, {0.0, 1.012}, {2.0, 1.012});
+  // The same wall in a grid whose origin is off by a fraction of a cell, with a person's cells.
+  GridMap raw = map_with_line(0.05, {-1.02, -0.99, 0.0}, 80, 80, {0.0, 1.012}, {2.0, 1.012});
+  const auto mark = [&](double x, double y) {
+    const int col = static_cast<int>(std::floor((x + 1.02) / 0.05));
+    const int row = static_cast<int>(std::floor((y + 0.99) / 0.05));
+    raw.cells[static_cast<std::size_t>(row) * 80 + static_cast<std::size_t>(col)] = 100;
+  };
+  mark(1.0, 0.0);
+  mark(1.05, 0.0);
+  mark(1.0, 0.05);
+  const eval::MapComparison same = compare_grid_maps(oracle, oracle, 0.0);
+  EXPECT_EQ(same.reference_occupied, oracle.occupied_cells());
+  EXPECT_EQ(same.wrongly_occupied, 0);
+  EXPECT_EQ(same.lost, 0);
+  const eval::MapComparison person = compare_grid_maps(oracle, raw, 0.1);
+  EXPECT_EQ(person.wrongly_occupied, 3);
+  EXPECT_EQ(person.lost, 0);
+  EXPECT_EQ(person.evaluated_occupied, raw.occupied_cells());
+  // Without a tolerance the shifted grid's wall matches nothing.
+  EXPECT_EQ(compare_grid_maps(oracle, raw, 0.0).lost, oracle.occupied_cells());
+  // Half the wall, in a coarser grid turned by 90 degrees: the other half is lost.
+  const GridMap half =
+      map_with_line(0.1, {3.0, -1.0, 1.5707963267948966}, 40, 40, {0.0, 1.012}, {1.0, 1.012});
+  const eval::MapComparison lost = compare_grid_maps(oracle, half, 0.1);
+  EXPECT_EQ(lost.wrongly_occupied, 0);
+  EXPECT_NEAR(lost.lost_share(), 0.5, 0.05);
+  EXPECT_THROW(compare_grid_maps(oracle, raw, -0.1), JobError);
+  EXPECT_THROW(compare_grid_maps(oracle, raw, std::nan("")), JobError);
+  GridMap broken = raw;
+  broken.cells.pop_back();
+  EXPECT_THROW(compare_grid_maps(oracle, broken, 0.1), JobError);
 }
 
 }  // namespace

@@ -36,13 +36,15 @@ struct Rgb {
 /// The colours of the pictures (docs/rendering.md, "Colours").
 namespace colours {
 inline constexpr Rgb kBackground{255, 255, 255};
-/// Kept points (labels 0, 3 and 4, or every point of an unfiltered bag) are grey: kKeptFaint where
-/// a pixel was hit once, darkening to kKept where it was hit kKeptSaturation times or more.
+/// Kept points (labels 0, 3, 4 and 7, or every point of an unfiltered bag) are grey: kKeptFaint
+/// where a pixel was hit once, darkening to kKept where it was hit kKeptSaturation times or more.
 inline constexpr Rgb kKept{20, 20, 20};
 inline constexpr Rgb kKeptFaint{150, 150, 150};
 inline constexpr int kKeptSaturation = 10;
 inline constexpr Rgb kDynamic{215, 38, 38};         ///< Removed, label 1.
 inline constexpr Rgb kUnknown{245, 145, 0};         ///< Removed, label 2 (presumption of guilt).
+inline constexpr Rgb kMovedLater{140, 60, 200};     ///< Removed by dispel clean, label 5.
+inline constexpr Rgb kVacated{0, 160, 170};         ///< Removed by dispel clean, label 6.
 inline constexpr Rgb kTrajectory{33, 102, 172};     ///< The robot's path.
 inline constexpr Rgb kNoise{165, 165, 165};         ///< Scan view: a valid beam in no object.
 inline constexpr Rgb kMaskedSector{222, 222, 235};  ///< Scan view: masked sectors' shade.
@@ -112,9 +114,11 @@ struct RenderResult {
   std::int64_t points_kept = 0;
   std::int64_t points_dynamic = 0;
   std::int64_t points_unknown = 0;
-  double from_s = 0.0, to_s = 0.0;  ///< The window drawn, seconds from the bag's start.
-  std::int64_t objects = 0;         ///< Scan view: objects in the segmentation.
-  std::vector<DrawnTrack> tracks;   ///< Scan view.
+  std::int64_t points_moved_later = 0;  ///< `dispel clean`'s label 5.
+  std::int64_t points_vacated = 0;      ///< `dispel clean`'s label 6.
+  double from_s = 0.0, to_s = 0.0;      ///< The window drawn, seconds from the bag's start.
+  std::int64_t objects = 0;             ///< Scan view: objects in the segmentation.
+  std::vector<DrawnTrack> tracks;       ///< Scan view.
 };
 
 /// Renders the bag. The output appears only when complete. @throws jobs::JobError

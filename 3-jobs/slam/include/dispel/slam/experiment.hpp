@@ -5,15 +5,21 @@
 ///
 /// For each seed the scenario is simulated once at the scanner's full range; the range cut of the
 /// scenario (lidar.range_limit_m) is then applied to that recording, as the thesis cut its
-/// recordings. Five SLAM runs follow (MRPT's ICP-SLAM, run_icp_slam_full()), each over a bag:
+/// recordings. Six SLAM runs follow (MRPT's ICP-SLAM, run_icp_slam_full()), each over a bag:
 ///   raw           the cut scans as they are
 ///   filtered_poi  the cut scans after `dispel filter` (presumption of innocence)
 ///   filtered_pog  the same with presumption of guilt
 ///   oracle        the cut scans with exactly the beams on moving actors removed (ground truth)
+///   oracle_static the cut scans with every beam on an actor removed, moving or standing still:
+///                 the map a recording without people would make
 ///   full_range    the uncut scans (the thesis's reference)
+/// With ExperimentOptions::clean a sixth SLAM run follows:
+///   cleaned       the cut scans after `dispel clean` (the offline filter, with the same
+///                 configuration as filtered_poi and the cleaner's defaults)
 /// Each trajectory is compared with the true pose, and the cut runs also with full_range's
 /// trajectory (the thesis's own protocol, its Table 4.1). The wheel odometry the engine is given
-/// is compared with the truth too, as a baseline.
+/// is compared with the truth too, as a baseline. The occupancy grid of each cut SLAM run is
+/// compared with oracle_static's (compare_grid_maps(): cells wrongly occupied, cells lost).
 
 #include <cstdint>
 #include <functional>
@@ -21,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "dispel/eval/map_quality.hpp"
 #include "dispel/eval/trajectory_error.hpp"
 
 namespace dispel::slam {
@@ -39,13 +46,18 @@ enum class Variant {
   kLocalizationFilteredPoi,
   kLocalizationFilteredPog,
   kLocalizationOracle,
+  kCleaned,       ///< With ExperimentOptions::clean: SLAM on the output of `dispel clean`.
+  kOracleStatic,  ///< Every actor's beams removed.
 };
-inline constexpr int kVariantCount = 10;
-/// "raw", "filtered_poi", "filtered_pog", "oracle", "full_range", "odometry", and
-/// "localization_raw" ... "localization_oracle".
+inline constexpr int kVariantCount = 12;
+/// The variants in the order of the tables: the cut SLAM runs (raw, filtered_poi, filtered_pog,
+/// cleaned, oracle, oracle_static), full_range, odometry, then the localisation runs.
+extern const Variant kTableOrder[kVariantCount];
+/// "raw", "filtered_poi", "filtered_pog", "oracle", "full_range", "odometry",
+/// "localization_raw" ... "localization_oracle", "cleaned" and "oracle_static".
 const char* variant_name(Variant v);
-/// The SLAM runs on the cut scans (raw, filtered_poi, filtered_pog, oracle): the ones the
-/// thesis's protocol compares with full_range.
+/// The SLAM runs on the cut scans (raw, filtered_poi, filtered_pog, cleaned, oracle,
+/// oracle_static): the ones the thesis's protocol compares with full_range.
 bool is_cut_slam_variant(Variant v);
 /// The localisation runs.
 bool is_localization_variant(Variant v);
@@ -67,6 +79,8 @@ struct ExperimentOptions {
   /// seed.
   bool localization = false;
   int particles = 500;  ///< For the localisation runs.
+  /// Also `dispel clean` over the cut scans, and SLAM on its output (the variant cleaned).
+  bool clean = false;
   /// A run diverged when its position error against the truth ever exceeds this ...
   double divergence_position_m = 0.5;
   /// ... or its yaw error ever exceeds this.
@@ -81,9 +95,13 @@ struct ExperimentRun {
   /// Against full_range's trajectory (the thesis's protocol); only for the cut SLAM runs.
   std::optional<eval::TrajectoryErrors> against_full_range;
   bool diverged = false;
-  /// Filtered variants: the filter's rates on this seed (dispel eval); NaN otherwise.
+  /// Filtered and cleaned variants: the filter's rates on this seed (dispel eval), the share of
+  /// the beams on actors standing still that it removed too; NaN otherwise.
   double preservation_rate = 0.0;
   double rejection_rate = 0.0;
+  double still_removed_rate = 0.0;
+  /// The cut SLAM runs: this run's occupancy grid against oracle_static's.
+  std::optional<eval::MapComparison> map;
   /// The trajectory (t, x, y, yaw; in the world frame of the simulation).
   std::vector<eval::TrajectoryPoint> trajectory;
 };
@@ -121,7 +139,9 @@ struct VariantSummary {
   Statistic rmse_position_m, rmse_x_m, rmse_y_m, rmse_yaw_rad, max_position_error_m;
   /// The thesis's protocol: the same figures against full_range (runs without it: zeros).
   Statistic full_range_rmse_x_m, full_range_rmse_y_m, full_range_rmse_yaw_rad;
-  Statistic preservation_rate, rejection_rate;  ///< Filtered variants only.
+  Statistic preservation_rate, rejection_rate, still_removed_rate;  ///< Filtered variants only.
+  /// The cut SLAM runs: shares of oracle_static's grid's occupied cells.
+  Statistic map_wrongly_occupied_share, map_lost_share;
 };
 
 /// Summaries in table order (every variant that ran).

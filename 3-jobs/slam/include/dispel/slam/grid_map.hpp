@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "dispel/core/pose2.hpp"
+#include "dispel/eval/map_quality.hpp"
 
 namespace dispel::slam {
 
@@ -47,6 +48,15 @@ struct GridMap {
   }
   friend bool operator!=(const GridMap& a, const GridMap& b) { return !(a == b); }
 };
+
+/// How @p evaluated's occupied cells differ from @p reference's, two maps of one place in one
+/// frame whose cells need not line up (each may have its own origin, rotation and resolution):
+/// an occupied cell of one map counts as matched when the other map has an occupied cell whose
+/// centre lies within @p tolerance_m of its centre. The counts of eval::MapComparison: occupied
+/// cells of each, evaluated cells unmatched (wrongly occupied), reference cells unmatched (lost).
+/// @throws dispel::jobs::JobError for an invalid map or a tolerance that is negative or not finite.
+eval::MapComparison compare_grid_maps(const GridMap& reference, const GridMap& evaluated,
+                                      double tolerance_m);
 
 /// Reads a map_server map: the YAML file's keys image (a PGM, P5 or P2, with a maximum value up
 /// to 255; a relative path is relative to the YAML file's folder), resolution (m/cell, > 0),

@@ -135,16 +135,41 @@ void OfflineCleaner::finish() {
   }
 }
 
+std::vector<std::pair<double, Eigen::Vector2f>>::const_iterator OfflineCleaner::moving_from(
+    const Track& track, double stamp_s) {
+  return std::lower_bound(
+      track.moving_at.begin(), track.moving_at.end(), stamp_s,
+      [](const std::pair<double, Eigen::Vector2f>& a, double t) { return a.first < t; });
+}
+
 bool OfflineCleaner::near_where_it_moved(const Track& track, double stamp_s,
                                          const Eigen::Vector2f& position) const {
   const auto& at = track.moving_at;
-  const auto later = std::lower_bound(
-      at.begin(), at.end(), stamp_s,
-      [](const std::pair<double, Eigen::Vector2f>& a, double t) { return a.first < t; });
+  const auto later = moving_from(track, stamp_s);
   const auto near = [&](const std::pair<double, Eigen::Vector2f>& a) {
     return static_cast<double>((a.second - position).norm()) <= config_.moved_from_m;
   };
   return (later != at.end() && near(*later)) || (later != at.begin() && near(*(later - 1)));
+}
+
+template <typename Window>
+bool OfflineCleaner::through_before_hit(const Eigen::Vector2d& p, std::ptrdiff_t first, int step,
+                                        int needed, Window window) const {
+  int through = 0;
+  for (std::ptrdiff_t j = first; j >= 0 && j < static_cast<std::ptrdiff_t>(scans_.size());
+       j += step) {
+    const auto k = static_cast<std::size_t>(j);
+    const int in = window(scans_[k].stamp_s);
+    if (in > 0) break;
+    if (in < 0) continue;
+    const Look seen = look(k, p);
+    if (seen == Look::kThrough) {
+      if (++through >= needed) return true;
+    } else if (seen == Look::kHit) {
+      return false;  // Still (or again) there.
+    }
+  }
+  return false;
 }
 
 // A moving track's object before it moved (or while it paused) is removed only when the scanner
@@ -155,28 +180,18 @@ constexpr int kLeftScans = 2;
 
 bool OfflineCleaner::left_after(const Eigen::Vector2d& p, double from_s) const {
   const double start = from_s + config_.through_gap_s;
-  auto k = static_cast<std::size_t>(
+  const std::ptrdiff_t first =
       std::lower_bound(scans_.begin(), scans_.end(), start,
                        [](const ScanRecord& r, double t) { return r.stamp_s < t; }) -
-      scans_.begin());
-  int through = 0;
-  for (; k < scans_.size() && scans_[k].stamp_s <= start + config_.through_horizon_s; ++k) {
-    if (sees_through(k, p)) {
-      if (++through >= kLeftScans) return true;
-    } else if (hits(k, p)) {
-      return false;
-    }
-  }
-  return false;
+      scans_.begin();
+  const double end = start + config_.through_horizon_s;
+  return through_before_hit(p, first, 1, kLeftScans, [end](double t) { return t <= end ? 0 : 1; });
 }
 
 // When @p track was next found moving at or after @p stamp_s (its last time if never).
 double OfflineCleaner::next_moving_s(const Track& track, double stamp_s) {
-  const auto& at = track.moving_at;
-  const auto next = std::lower_bound(
-      at.begin(), at.end(), stamp_s,
-      [](const std::pair<double, Eigen::Vector2f>& a, double t) { return a.first < t; });
-  return next != at.end() ? next->first : track.object.last_dynamic_s;
+  const auto next = moving_from(track, stamp_s);
+  return next != track.moving_at.end() ? next->first : track.object.last_dynamic_s;
 }
 
 constexpr int kAttached_cm = 3;
@@ -205,30 +220,31 @@ double OfflineCleaner::beam_toward(const ScanRecord& r, const Eigen::Vector2d& p
 // The sine of the angle at which a beam must meet the surface beyond a place to see through it.
 constexpr double kMinSlant = 0.5;
 
-// Beams toward @p p and beside it returned from beyond it by free_margin_m, or nothing returned
-// within range_max: scan @p k saw through @p p. Out of its view (or beyond max_range_m), or a beam
-// there measured nothing usable: it did not.
-bool OfflineCleaner::sees_through(std::size_t k, const Eigen::Vector2d& p) const {
-  const ScanRecord& r = scans_[k];
-  if (!r.pose || !(r.angle_increment_rad > 0.0)) return false;
-  Eigen::Vector2d q;
-  const double index = beam_toward(r, p, q);
+namespace {
+
+// Beams toward @p q (the place in the sensor frame, beam @p index toward it) and beside it
+// returned from beyond it by @p margin_m, or nothing returned within range_max: the scan saw
+// through the place. Out of its view (or beyond @p max_range_m), or a beam there measured nothing
+// usable: it did not.
+template <typename Record>
+bool sees_through(const Record& r, const Eigen::Vector2d& q, double index, double max_range_m,
+                  double margin_m, std::uint16_t no_return, std::uint16_t unusable) {
   const double d = q.norm();
-  if (!(d < config_.max_range_m)) return false;
+  if (!(d < max_range_m)) return false;
   if (!(index >= 1.0 && index <= static_cast<double>(r.range_cm.size()) - 2.0)) return false;
   const auto i = static_cast<std::size_t>(index);
   for (std::size_t j = i - 1; j <= i + 1; ++j) {
     const std::uint16_t c = r.range_cm[j];
-    if (c == kUnusable) return false;
-    if (c == kNoReturn ? !(d < static_cast<double>(r.range_max_m))
-                       : static_cast<double>(c) * 0.01 < d + config_.free_margin_m) {
+    if (c == unusable) return false;
+    if (c == no_return ? !(d < static_cast<double>(r.range_max_m))
+                       : static_cast<double>(c) * 0.01 < d + margin_m) {
       return false;
     }
   }
   // A surface beyond seen at a slant (the returns beside the beam far apart along it) may be the
   // one @p p lies on, seen from along it: a few centimetres of pose error move where the beam
   // meets it by decimetres. Only a surface met at least at kMinSlant counts.
-  if (r.range_cm[i - 1] < kUnusable && r.range_cm[i + 1] < kUnusable) {
+  if (r.range_cm[i - 1] < unusable && r.range_cm[i + 1] < unusable) {
     const auto at = [&](std::size_t j) -> Eigen::Vector2d {
       const double bearing = r.angle_min_rad + r.angle_increment_rad * static_cast<double>(j);
       return static_cast<double>(r.range_cm[j]) * 0.01 *
@@ -244,25 +260,36 @@ bool OfflineCleaner::sees_through(std::size_t k, const Eigen::Vector2d& p) const
   return true;
 }
 
+}  // namespace
+
+// Scan @p k saw through @p p (sees_through() above), or its beam toward @p p returned within
+// free_margin_m of it (a hit), or neither.
+OfflineCleaner::Look OfflineCleaner::look(std::size_t k, const Eigen::Vector2d& p) const {
+  const ScanRecord& r = scans_[k];
+  if (!r.pose || !(r.angle_increment_rad > 0.0)) return Look::kNeither;
+  Eigen::Vector2d q;
+  const double index = beam_toward(r, p, q);
+  if (sees_through(r, q, index, config_.max_range_m, config_.free_margin_m, kNoReturn, kUnusable)) {
+    return Look::kThrough;
+  }
+  if (!(index >= 0.0 && index < static_cast<double>(r.range_cm.size()))) return Look::kNeither;
+  const std::uint16_t c = r.range_cm[static_cast<std::size_t>(index)];
+  return c < kUnusable && std::abs(static_cast<double>(c) * 0.01 - q.norm()) < config_.free_margin_m
+             ? Look::kHit
+             : Look::kNeither;
+}
+
 // Walks the scans from through_gap_s to through_horizon_s away from scan @p k, later (@p step 1)
 // or earlier (-1), and says whether through_min_scans of them saw through @p p before one hit it
 // (a return within free_margin_m of it on the beam toward it).
 bool OfflineCleaner::seen_through(std::size_t k, const Eigen::Vector2d& p, int step) const {
   const double t0 = scans_[k].stamp_s;
-  int through = 0;
-  for (auto j = static_cast<std::ptrdiff_t>(k) + step;
-       j >= 0 && j < static_cast<std::ptrdiff_t>(scans_.size()); j += step) {
-    const auto u = static_cast<std::size_t>(j);
-    const double dt = std::abs(scans_[u].stamp_s - t0);
-    if (dt > config_.through_horizon_s) break;
-    if (dt < config_.through_gap_s) continue;
-    if (sees_through(u, p)) {
-      if (++through >= config_.through_min_scans) return true;
-    } else if (hits(u, p)) {
-      return false;  // Still (or again) there.
-    }
-  }
-  return false;
+  return through_before_hit(p, static_cast<std::ptrdiff_t>(k) + step, step,
+                            config_.through_min_scans, [&](double t) {
+                              const double dt = std::abs(t - t0);
+                              if (dt > config_.through_horizon_s) return 1;
+                              return dt < config_.through_gap_s ? -1 : 0;
+                            });
 }
 
 // Beam @p b of scan @p k returned the same range (kAttached_m) in the scans before and after while
@@ -284,18 +311,6 @@ bool OfflineCleaner::attached(std::size_t k, std::size_t b) const {
   return true;
 }
 
-// Scan @p k's beam toward @p p returned within free_margin_m of it.
-bool OfflineCleaner::hits(std::size_t k, const Eigen::Vector2d& p) const {
-  const ScanRecord& r = scans_[k];
-  if (!r.pose || !(r.angle_increment_rad > 0.0)) return false;
-  Eigen::Vector2d q;
-  const double index = beam_toward(r, p, q);
-  if (!(index >= 0.0 && index < static_cast<double>(r.range_cm.size()))) return false;
-  const std::uint16_t c = r.range_cm[static_cast<std::size_t>(index)];
-  return c < kUnusable &&
-         std::abs(static_cast<double>(c) * 0.01 - q.norm()) < config_.free_margin_m;
-}
-
 void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector<CleanLabel>& out) {
   if (!finished_) finish();
   const ScanRecord& record = scans_.at(index);
@@ -307,6 +322,15 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
   }
   out.assign(n, CleanLabel::kInvalid);
   const std::vector<Eigen::Vector2d>& unit = directions_.of(scan);
+  // Each beam's end in the fixed frame, worked out once when first asked for.
+  points_.assign(n, Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  const auto point = [&](std::size_t b) -> const Eigen::Vector2d& {
+    if (std::isnan(points_[b].x())) {
+      points_[b] =
+          PoseTransform(beam_pose(record, b))(static_cast<double>(scan.ranges_m[b]) * unit[b]);
+    }
+    return points_[b];
+  };
   // A small thing (or a run of beams in no object) whose place the scanner saw through before it
   // came or after it left: decided for the whole thing by the majority of its beams (a beam at
   // its edge is seen past from elsewhere).
@@ -347,12 +371,14 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
         continue;
       }
       const Track& t = tracks_[record.track_of[o]];
-      if (!t.object.moving || record.stamp_s > t.object.last_dynamic_s) continue;
+      // Asked only where it matters: label() removes the object only near where it moved.
+      if (!t.object.moving || record.stamp_s > t.object.last_dynamic_s ||
+          !near_where_it_moved(t, record.stamp_s, record.position_of[o])) {
+        continue;
+      }
       auto& [beams, left] = tally[o];
       ++beams;
-      const Eigen::Vector2d p =
-          PoseTransform(beam_pose(record, b))(static_cast<double>(scan.ranges_m[b]) * unit[b]);
-      if (left_after(p, next_moving_s(t, record.stamp_s))) ++left;
+      if (left_after(point(b), next_moving_s(t, record.stamp_s))) ++left;
     }
     for (std::size_t o = 0; o < left_.size(); ++o) {
       left_[o] = tally[o].second > 0 && 2 * tally[o].second >= tally[o].first ? 1 : 0;
@@ -364,8 +390,7 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
       if (group_[b] < 0) continue;
       auto& [beams, through] = votes_[static_cast<std::size_t>(group_[b])];
       ++beams;
-      const Eigen::Vector2d p =
-          PoseTransform(beam_pose(record, b))(static_cast<double>(scan.ranges_m[b]) * unit[b]);
+      const Eigen::Vector2d& p = point(b);
       if (!attached(index, b) && (seen_through(index, p, 1) || seen_through(index, p, -1))) {
         ++through;
       }

@@ -154,14 +154,24 @@ class OfflineCleaner {
 
   // The sensor's pose when beam @p b of @p record's scan was measured.
   static Pose2 beam_pose(const ScanRecord& record, std::size_t b);
-  bool sees_through(std::size_t k, const Eigen::Vector2d& p) const;
-  bool hits(std::size_t k, const Eigen::Vector2d& p) const;
+  // What scan k's beam toward a place in the fixed frame says of it.
+  enum class Look : std::uint8_t { kThrough, kHit, kNeither };
+  Look look(std::size_t k, const Eigen::Vector2d& p) const;
   static double beam_toward(const ScanRecord& r, const Eigen::Vector2d& p, Eigen::Vector2d& q);
   bool attached(std::size_t k, std::size_t b) const;
+  // Walks the scans from @p first by @p step; @p window(stamp) says whether a scan is skipped
+  // (-1), looked at (0) or ends the walk (1). True when @p needed of them saw through @p p before
+  // one hit it.
+  template <typename Window>
+  bool through_before_hit(const Eigen::Vector2d& p, std::ptrdiff_t first, int step, int needed,
+                          Window window) const;
   // Whether the scans from through_gap_s after @p from_s on saw through @p p before one hit it.
   bool left_after(const Eigen::Vector2d& p, double from_s) const;
-  static double next_moving_s(const Track& track, double stamp_s);
   bool seen_through(std::size_t k, const Eigen::Vector2d& p, int step) const;
+  // @p track's first sighting while moving at or after @p stamp_s (end() if none).
+  static std::vector<std::pair<double, Eigen::Vector2f>>::const_iterator moving_from(
+      const Track& track, double stamp_s);
+  static double next_moving_s(const Track& track, double stamp_s);
   bool near_where_it_moved(const Track& track, double stamp_s,
                            const Eigen::Vector2f& position) const;
 
@@ -176,6 +186,8 @@ class OfflineCleaner {
   std::vector<std::pair<std::int32_t, std::int32_t>> votes_;
   std::vector<std::uint8_t> left_;  // label(): per object, see left_after().
   std::vector<std::pair<std::int32_t, std::int32_t>> left_votes_;
+  std::vector<Eigen::Vector2d>
+      points_;  // label(): each beam's end in the fixed frame, NaN: not yet.
   CleanCounts counts_;
   bool finished_ = false;
 };

@@ -12,11 +12,6 @@ namespace {
 
 float log_odds(double p) { return static_cast<float>(std::log(p / (1.0 - p))); }
 
-std::uint64_t pack(std::int64_t col, std::int64_t row) {
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(col)) << 32) |
-         static_cast<std::uint32_t>(row);
-}
-
 }  // namespace
 
 void OccupancyGridConfig::validate() const {
@@ -57,7 +52,7 @@ OccupancyGrid::OccupancyGrid(const OccupancyGridConfig& config) {
 float& OccupancyGrid::cell(std::int64_t col, std::int64_t row) {
   // Arithmetic shifts: floor division for negative cells too.
   const std::int64_t tile_col = col >> kTileBits, tile_row = row >> kTileBits;
-  const std::uint64_t key = pack(tile_col, tile_row);
+  const std::uint64_t key = cell_key(tile_col, tile_row);
   if (last_tile_ < 0 || key != last_tile_key_) {
     std::int32_t* index = tile_index_.find(key);
     if (index == nullptr) {
@@ -129,7 +124,7 @@ std::vector<std::uint64_t> OccupancyGrid::occupied_cells() const {
       for (int c = 0; c < kTileCells; ++c) {
         const float l = tile[static_cast<std::size_t>(r * kTileCells + c)];
         if (l >= occupied_) {  // false for NaN
-          out.push_back(pack((tile_col << kTileBits) + c, (tile_row << kTileBits) + r));
+          out.push_back(cell_key((tile_col << kTileBits) + c, (tile_row << kTileBits) + r));
         }
       }
     }
@@ -147,9 +142,9 @@ std::int64_t OccupancyGrid::known_cells() const {
 }
 
 double MapComparison::wrongly_occupied_share() const {
-  return reference_occupied > 0 ? static_cast<double>(wrongly_occupied) /
-                                      static_cast<double>(reference_occupied)
-                                : std::numeric_limits<double>::quiet_NaN();
+  return reference_occupied > 0
+             ? static_cast<double>(wrongly_occupied) / static_cast<double>(reference_occupied)
+             : std::numeric_limits<double>::quiet_NaN();
 }
 
 double MapComparison::lost_share() const {

@@ -8,10 +8,7 @@
 namespace dispel::eval {
 namespace {
 
-std::uint64_t key(std::int64_t col, std::int64_t row) {
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(col)) << 32) |
-         static_cast<std::uint32_t>(row);
-}
+std::uint64_t key(std::int64_t col, std::int64_t row) { return OccupancyGrid::cell_key(col, row); }
 
 TEST(OccupancyGrid, ARayMissesTheCellsItCrossesAndHitsItsEnd) {
   OccupancyGrid grid;  // 0.05 m

@@ -205,14 +205,15 @@ class PointBuckets {
  public:
   PointBuckets(const std::vector<Eigen::Vector2d>& points, double tolerance_m)
       : bucket_m_(std::max(tolerance_m, 1e-6)), tolerance_m_(tolerance_m) {
-    for (const Eigen::Vector2d& p : points)
-      buckets_[key(bucket(p.x()), bucket(p.y()))].push_back(p);
+    for (const Eigen::Vector2d& p : points) {
+      buckets_[eval::OccupancyGrid::cell_key(bucket(p.x()), bucket(p.y()))].push_back(p);
+    }
   }
   bool has_near(const Eigen::Vector2d& q) const {
     const std::int64_t bx = bucket(q.x()), by = bucket(q.y());
     for (std::int64_t dx = -1; dx <= 1; ++dx) {
       for (std::int64_t dy = -1; dy <= 1; ++dy) {
-        const auto it = buckets_.find(key(bx + dx, by + dy));
+        const auto it = buckets_.find(eval::OccupancyGrid::cell_key(bx + dx, by + dy));
         if (it == buckets_.end()) continue;
         for (const Eigen::Vector2d& p : it->second) {
           if ((p - q).norm() <= tolerance_m_) return true;
@@ -225,10 +226,6 @@ class PointBuckets {
  private:
   std::int64_t bucket(double v) const {
     return static_cast<std::int64_t>(std::floor(v / bucket_m_));
-  }
-  static std::uint64_t key(std::int64_t x, std::int64_t y) {
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(x)) << 32) |
-           static_cast<std::uint32_t>(y);
   }
   double bucket_m_, tolerance_m_;
   std::unordered_map<std::uint64_t, std::vector<Eigen::Vector2d>> buckets_;

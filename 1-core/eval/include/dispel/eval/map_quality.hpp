@@ -45,7 +45,12 @@ class OccupancyGrid {
     trace(from_m, to_m, false);
   }
 
-  /// The occupied cells, as keys (cell column and row packed), sorted.
+  /// A cell's key: its column and row (each within +-2^31) packed into 64 bits.
+  static std::uint64_t cell_key(std::int64_t col, std::int64_t row) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(col)) << 32) |
+           static_cast<std::uint32_t>(row);
+  }
+  /// The occupied cells, as cell_key()s, sorted.
   std::vector<std::uint64_t> occupied_cells() const;
   /// Cells any ray reached.
   std::int64_t known_cells() const;

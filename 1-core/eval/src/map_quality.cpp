@@ -50,8 +50,11 @@ OccupancyGrid::OccupancyGrid(const OccupancyGridConfig& config) {
 }
 
 float& OccupancyGrid::cell(std::int64_t col, std::int64_t row) {
-  // Arithmetic shifts: floor division for negative cells too.
-  const std::int64_t tile_col = col >> kTileBits, tile_row = row >> kTileBits;
+  // Floor division, negative cells too (no shifts: a negative value's left shift is undefined).
+  const auto floor_div = [](std::int64_t v) {
+    return v >= 0 ? v / kTileCells : -((-v + kTileCells - 1) / kTileCells);
+  };
+  const std::int64_t tile_col = floor_div(col), tile_row = floor_div(row);
   const std::uint64_t key = cell_key(tile_col, tile_row);
   if (last_tile_ < 0 || key != last_tile_key_) {
     std::int32_t* index = tile_index_.find(key);
@@ -66,7 +69,7 @@ float& OccupancyGrid::cell(std::int64_t col, std::int64_t row) {
     last_tile_key_ = key;
     last_tile_ = *index;
   }
-  const std::int64_t c = col - (tile_col << kTileBits), r = row - (tile_row << kTileBits);
+  const std::int64_t c = col - tile_col * kTileCells, r = row - tile_row * kTileCells;
   return tiles_[static_cast<std::size_t>(last_tile_)][static_cast<std::size_t>(r * kTileCells + c)];
 }
 
@@ -124,7 +127,7 @@ std::vector<std::uint64_t> OccupancyGrid::occupied_cells() const {
       for (int c = 0; c < kTileCells; ++c) {
         const float l = tile[static_cast<std::size_t>(r * kTileCells + c)];
         if (l >= occupied_) {  // false for NaN
-          out.push_back(cell_key((tile_col << kTileBits) + c, (tile_row << kTileBits) + r));
+          out.push_back(cell_key(tile_col * kTileCells + c, tile_row * kTileCells + r));
         }
       }
     }

@@ -127,11 +127,13 @@ Evaluation evaluate_recordings(const std::string& truth_bag, const std::string& 
       }
       // Labels: BeamLabel (dispel filter) or CleanLabel (dispel clean), whose removed values
       // include BeamLabel's (1 dynamic, 2 unknown).
-      removed[i] = from_labels ? (rs.intensities.size() == n && rs.intensities[i] >= 0.0F &&
-                                  rs.intensities[i] <= 7.0F &&
-                                  dispel::removed(static_cast<CleanLabel>(
-                                      static_cast<std::uint8_t>(rs.intensities[i]))))
-                               : std::isnan(rs.ranges_m[i]) && !std::isnan(t.scan.ranges_m[i]);
+      if (from_labels) {
+        const std::optional<CleanLabel> label =
+            rs.intensities.size() == n ? clean_label(rs.intensities[i]) : std::nullopt;
+        removed[i] = label && dispel::removed(*label);
+      } else {
+        removed[i] = std::isnan(rs.ranges_m[i]) && !std::isnan(t.scan.ranges_m[i]);
+      }
     }
     evaluator.add_scan(stamp.seconds(), codes, ids, removed);
     if (grids) draw_scan(t.scan, codes, removed, *motion, *grids);

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 
+#include "dispel/core/offline_cleaner.hpp"
 #include "dispel/jobs/job.hpp"
 #include "layout.hpp"
 
@@ -94,11 +96,24 @@ enum PointClass : int {
   kClassCount = 5
 };
 
-PointClass point_class(float label) {
-  if (label == 1.0F) return kDynamicClass;
-  if (label == 2.0F) return kUnknownClass;
-  if (label == 5.0F) return kMovedLaterClass;
-  if (label == 6.0F) return kVacatedClass;
+PointClass point_class(float value) {
+  const std::optional<CleanLabel> label = clean_label(value);
+  if (!label) return kKeptClass;
+  switch (*label) {  // Every label named, so that a new one is a compiler warning here.
+    case CleanLabel::kDynamic:
+      return kDynamicClass;
+    case CleanLabel::kUnknown:
+      return kUnknownClass;
+    case CleanLabel::kMovedLater:
+      return kMovedLaterClass;
+    case CleanLabel::kVacated:
+      return kVacatedClass;
+    case CleanLabel::kStatic:
+    case CleanLabel::kNoObject:
+    case CleanLabel::kInvalid:
+    case CleanLabel::kRestored:
+      return kKeptClass;
+  }
   return kKeptClass;
 }
 

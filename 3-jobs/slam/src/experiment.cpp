@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <system_error>
 
@@ -255,23 +256,22 @@ ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProg
     std::vector<ExperimentRun> runs(kVariantCount);
     std::vector<char> ran(kVariantCount, 0);
     std::vector<eval::TrajectoryPoint> odometry;
-    GridMap map;  // The oracle's: the hall without the people.
     // The filter's rates on this seed, once per filtered bag (SLAM and localisation share them).
-    const eval::Rates poi_rates = jobs::evaluate_bags(bag("raw"), bag("filtered_poi"));
-    const eval::Rates pog_rates = jobs::evaluate_bags(bag("raw"), bag("filtered_pog"));
-    const eval::Rates clean_rates =
-        o.clean ? jobs::evaluate_bags(bag("raw"), bag("cleaned"), "/scan_clean") : eval::Rates{};
+    std::vector<std::optional<eval::Rates>> rates(kVariantCount);
+    rates[static_cast<std::size_t>(Variant::kFilteredPoi)] =
+        jobs::evaluate_bags(bag("raw"), bag("filtered_poi"));
+    rates[static_cast<std::size_t>(Variant::kFilteredPog)] =
+        jobs::evaluate_bags(bag("raw"), bag("filtered_pog"));
+    if (o.clean) {
+      rates[static_cast<std::size_t>(Variant::kCleaned)] =
+          jobs::evaluate_bags(bag("raw"), bag("cleaned"), "/scan_clean");
+    }
     const auto rates_of = [&](Variant v, ExperimentRun& run) {
-      run.preservation_rate = run.rejection_rate = run.still_removed_rate =
-          std::numeric_limits<double>::quiet_NaN();
-      if (v == Variant::kFilteredPoi || v == Variant::kFilteredPog || v == Variant::kCleaned) {
-        const eval::Rates& rates = v == Variant::kFilteredPoi
-                                       ? poi_rates
-                                       : (v == Variant::kFilteredPog ? pog_rates : clean_rates);
-        run.preservation_rate = rates.preservation_rate();
-        run.rejection_rate = rates.rejection_rate();
-        run.still_removed_rate = rates.still_removed_rate();
-      }
+      const std::optional<eval::Rates>& r = rates[static_cast<std::size_t>(v)];
+      constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+      run.preservation_rate = r ? r->preservation_rate() : kNone;
+      run.rejection_rate = r ? r->rejection_rate() : kNone;
+      run.still_removed_rate = r ? r->still_removed_rate() : kNone;
     };
     const auto scan_topic = [](Variant v) {
       if (v == Variant::kCleaned) return "/scan_clean";
@@ -294,13 +294,14 @@ ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProg
       if (v == Variant::kRaw) odometry = std::move(r.odometry);
       grids[static_cast<std::size_t>(v)] = std::move(r.grid);
     }
-    map = grids[static_cast<std::size_t>(Variant::kOracle)];
     const GridMap& no_people = grids[static_cast<std::size_t>(Variant::kOracleStatic)];
     for (Variant v : order) {
       if (!is_cut_slam_variant(v)) continue;
       runs[static_cast<std::size_t>(v)].map =
           compare_grid_maps(no_people, grids[static_cast<std::size_t>(v)], kMapToleranceM);
     }
+    // The oracle's map, the hall without the people walking, for the localisation.
+    const GridMap map = std::move(grids[static_cast<std::size_t>(Variant::kOracle)]);
     ExperimentRun& odo = runs[static_cast<std::size_t>(Variant::kOdometry)];
     ran[static_cast<std::size_t>(Variant::kOdometry)] = 1;
     odo.seed = seed;

@@ -21,6 +21,7 @@
 /// track's position, its width); per track a summary (about 100 bytes) and 12 bytes per scan in
 /// which it was dynamic.
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <unordered_map>
@@ -81,6 +82,14 @@ enum class CleanLabel : std::uint8_t {
 inline bool removed(CleanLabel label) {
   return label == CleanLabel::kDynamic || label == CleanLabel::kUnknown ||
          label == CleanLabel::kMovedLater || label == CleanLabel::kVacated;
+}
+
+/// The label a labels topic's intensity holds (`<scan>_clean_labels`, or `<scan>_labels`, whose
+/// BeamLabel values 0-4 mean the same); nothing for a value that is no label (negative, above 7,
+/// fractional, NaN).
+inline std::optional<CleanLabel> clean_label(float value) {
+  if (!(value >= 0.0F && value <= 7.0F) || value != std::floor(value)) return std::nullopt;
+  return static_cast<CleanLabel>(static_cast<std::uint8_t>(value));
 }
 
 /// One object (an online track) over the recording: when it was seen, moving, and removed.

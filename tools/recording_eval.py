@@ -7,7 +7,8 @@ usage: /usr/bin/python3 tools/recording_eval.py FILTERED.bag --scan-topic TOPIC
            [--cell M] [--min-scans N] [--min-span S]
 
 FILTERED.bag is `dispel filter`'s output (it has TOPIC_labels, and TOPIC_pose when the
-registration is on). Beams labelled invalid (4) are not counted.
+registration is on), or `dispel clean`'s with TOPIC its `<scan topic>_clean`. Beams labelled
+invalid (4) are not counted.
 
 --people TOPIC: person annotations as in angusleigh/leg_tracker_benchmarks (leg_tracker/Person
   messages without a header, positions in the laser frame, each belonging to the latest scan
@@ -22,7 +23,9 @@ Without --people: background beams end in a 0.1 m cell of the registered frame (
 import json, math, sys
 import rosbag
 
-REMOVED = (1, 2)
+# Removed labels: dispel filter's 1 dynamic and 2 unknown; dispel clean's `_clean_labels` adds 5
+# (moved at another time) and 6 (place seen through).
+REMOVED = (1, 2, 5, 6)
 INVALID = 4
 
 def main():

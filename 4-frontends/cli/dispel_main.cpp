@@ -123,7 +123,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   clean_cmd
       ->add_option("--moving-travel", clean.job.clean.moving_min_travel_m,
-                   "...and it travelled this far (m)")
+                   "...and it travelled this far (m) while found moving")
       ->capture_default_str();
   clean_cmd
       ->add_option(

@@ -163,6 +163,7 @@ nlohmann::ordered_json clean_stats_json(const jobs::CleanJobOptions& o,
                        {"first_dynamic_s", x.first_dynamic_s},
                        {"last_dynamic_s", x.last_dynamic_s},
                        {"travel_m", x.travel_m},
+                       {"dynamic_travel_m", x.dynamic_travel_m},
                        {"moving", x.moving},
                        {"beams", x.beams},
                        {"beams_removed", x.beams_removed}});

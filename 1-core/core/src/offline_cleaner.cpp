@@ -88,6 +88,10 @@ void OfflineCleaner::add(const LaserScan& scan, const FilterResult& result) {
         o.last_dynamic_s = scan.stamp_s;
         ++o.dynamic_scans;
         track.moving_at.emplace_back(scan.stamp_s, t.position_m.cast<float>());
+        o.dynamic_travel_m =
+            std::max(o.dynamic_travel_m,
+                     static_cast<double>(
+                         (track.moving_at.back().second - track.moving_at.front().second).norm()));
       }
       o.travel_m = std::max(o.travel_m, (t.position_m - track.first_position).norm());
       record.track_of[static_cast<std::size_t>(t.object_index)] = it->second;
@@ -131,7 +135,7 @@ void OfflineCleaner::finish() {
   finished_ = true;
   for (Track& t : tracks_) {
     t.object.moving = t.object.dynamic_scans >= config_.moving_min_scans &&
-                      t.object.travel_m >= config_.moving_min_travel_m;
+                      t.object.dynamic_travel_m >= config_.moving_min_travel_m;
   }
 }
 

@@ -62,6 +62,64 @@ TEST(OfflineCleaner, WhatStoodWhereTheScannerLaterSawThroughIsRemovedWhenAsked) 
   }
 }
 
+// The box of scan_at() as one object tracked as @p id at @p position, labelled dynamic or static.
+FilterResult box_tracked(const LaserScan& scan, std::uint64_t id, const Eigen::Vector2d& position,
+                         bool dynamic) {
+  FilterResult r = all_static(scan);
+  Segmentation& seg = r.segmentation;
+  seg.beam_labels.assign(scan.size(), kLabelNoise);
+  ScanObject box;
+  box.first_beam = 40;
+  box.last_beam = 60;
+  box.point_count = 21;
+  box.first_point_m = {2.0, -0.2};
+  box.last_point_m = {2.0, 0.2};
+  seg.objects.push_back(box);
+  for (int b = 40; b <= 60; ++b) {
+    seg.beam_labels[static_cast<std::size_t>(b)] = 0;
+    r.labels[static_cast<std::size_t>(b)] = dynamic ? BeamLabel::kDynamic : BeamLabel::kStatic;
+  }
+  TrackedObject t;
+  t.id = id;
+  t.object_class = dynamic ? ObjectClass::kDynamic : ObjectClass::kStatic;
+  t.position_m = position;
+  t.object_index = 0;
+  r.tracks.push_back(t);
+  return r;
+}
+
+// negative_2 (a real robot, laser-only, no people): a track dynamic for three scans in which it
+// hardly moved, whose centroid then slid 2-4 m while it was static (a wall piece on drifting
+// poses), counted as moving by its travel from where it was first seen and kept its false
+// removals. Travel counts only while dynamic: it never moved, and its beams are restored. A
+// track that moved 0.3 m a scan while dynamic moved.
+TEST(OfflineCleaner, ATrackMovedOnlyIfItTravelledWhileFoundDynamic) {
+  for (const double step_while_dynamic : {0.0, 0.3}) {
+    OfflineCleaner cleaner{CleanConfig{}};
+    for (int k = 0; k < 20; ++k) {
+      const LaserScan s = scan_at(0);  // The box stays; only the track's centroid moves.
+      const bool dynamic = k < 3;
+      const Eigen::Vector2d position =
+          dynamic ? Eigen::Vector2d{2.0, step_while_dynamic * k} : Eigen::Vector2d{2.0, 0.2 * k};
+      LaserScan at_k = s;
+      at_k.stamp_s = 100.0 + 0.1 * k;
+      cleaner.add(at_k, box_tracked(at_k, 7, position, dynamic));
+    }
+    cleaner.finish();
+    ASSERT_EQ(cleaner.objects().size(), 1U);
+    const CleanedObject& o = cleaner.objects().front();
+    EXPECT_EQ(o.dynamic_scans, 3);
+    EXPECT_NEAR(o.travel_m, 3.8, 1e-9);
+    EXPECT_NEAR(o.dynamic_travel_m, 2 * step_while_dynamic, 1e-6);
+    const bool moved = step_while_dynamic > 0.0;
+    EXPECT_EQ(o.moving, moved);
+    std::vector<CleanLabel> labels;
+    LaserScan first = scan_at(0);
+    cleaner.label(0, first, labels);
+    EXPECT_EQ(labels[50], moved ? CleanLabel::kDynamic : CleanLabel::kRestored);
+  }
+}
+
 TEST(OfflineCleaner, BadParametersAndScansAreRefusedByName) {
   CleanConfig config;
   config.max_width_m = 0.0;

@@ -132,7 +132,9 @@ TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
 // and stand about a slow robot among pillars, walls out of range. Before a moving track's
 // standing part was removed only where the scanner later saw through it, a pillar whose track
 // had taken over a passer-by went with it: 0.61 of the static beams kept. Measured: walls kept
-// 1.0000 online and clean; moving removed 0.936, 0.982; still people removed 0.738, 0.874.
+// 1.0000 online and clean; moving removed 0.936, 0.970; still people removed 0.738, 0.874. (0.982
+// moving removed clean while a track's travel counted from where it was first seen: a walker's
+// track dynamic in 10 scans, in which it moved 0.25 m, is now restored.)
 TEST(CleanJob, TheThesisHallsStandingPeopleGoAndItsPillarsStay) {
   FilterJobOptions f;
   f.config_path = source_path("config/default_masked.yaml");
@@ -141,7 +143,7 @@ TEST(CleanJob, TheThesisHallsStandingPeopleGoAndItsPillarsStay) {
   const eval::Rates& online = run.online;
   const eval::Rates& clean = run.clean;
   EXPECT_GE(clean.preservation_rate(), 0.9999);
-  EXPECT_GE(clean.rejection_rate(), 0.97);
+  EXPECT_GE(clean.rejection_rate(), 0.965);
   EXPECT_GT(clean.rejection_rate(), online.rejection_rate());
   EXPECT_GE(clean.still_removed_rate(), 0.85);
   EXPECT_GT(clean.still_removed_rate(), online.still_removed_rate() + 0.1);
@@ -152,8 +154,10 @@ TEST(CleanJob, TheThesisHallsStandingPeopleGoAndItsPillarsStay) {
 }
 
 // A real robot among no people (negative_2): every beam removed is a false removal. Cleaned:
-// left 0.103 %, right 0.092 %, rear 0.036 % of the valid beams (the online filter 0.19 / 0.13 /
-// 0.05 %; issue target 0.1 %, just missed on the left laser).
+// left 0.036 %, right 0.068 %, rear 0.022 % of the valid beams (the online filter 0.19 / 0.13 /
+// 0.05 %; the target 0.1 %). Before a track's travel counted only while it was dynamic: 0.103 /
+// 0.092 / 0.036 %: tracks of wall pieces dynamic for 3-6 scans, whose centroids then slid 1-4 m
+// on the laser-only poses, counted as moving and kept their false removals.
 TEST(CleanJob, RealRobotWithoutPeopleKeepsItsWalls) {
   for (const std::string laser : {"/left_scan", "/right_scan", "/rear_scan"}) {
     CleanJobOptions c;
@@ -166,7 +170,7 @@ TEST(CleanJob, RealRobotWithoutPeopleKeepsItsWalls) {
     const std::int64_t removed_beams =
         stats.counts.removed_online + stats.counts.moved_later + stats.counts.vacated;
     EXPECT_LE(static_cast<double>(removed_beams),
-              0.0011 * static_cast<double>(stats.counts.valid_beams))
+              0.001 * static_cast<double>(stats.counts.valid_beams))
         << laser;
     std::remove(c.filter.output.c_str());
   }

@@ -38,7 +38,9 @@ struct CleanConfig {
   /// A track counts as moving when the online filter labelled it dynamic in at least this many
   /// scans (a wall piece whose outline slid is dynamic for a scan or two).
   int moving_min_scans = 3;
-  /// ... and its centroid moved at least this far (m) from where it was first seen.
+  /// ... and, in those scans, its centroid moved at least this far (m) from where it was first
+  /// dynamic. Not from where it was first seen: on a real robot's laser-only poses a wall piece's
+  /// centroid drifts metres over the seconds it is tracked as static.
   double moving_min_travel_m = 0.5;
   /// A moving track's object in a scan in which it was not found moving is removed only within
   /// this distance (m) of where the track was found moving nearest in time: a track that took
@@ -100,7 +102,11 @@ struct CleanedObject {
   std::int32_t dynamic_scans = 0;  ///< Of them, labelled dynamic by the online filter.
   double first_dynamic_s = 0.0, last_dynamic_s = 0.0;  ///< When it was (0 when never).
   double travel_m = 0.0;  ///< Largest distance of its centroid from where it was first seen.
-  bool moving = false;    ///< Counted as moving (CleanConfig): every beam of it removed.
+  /// Largest distance of its centroid, in the scans in which it was dynamic, from where it was
+  /// first dynamic: what decides `moving` (a static thing's centroid can slide while it is taken
+  /// for static, as a wall piece does on a moving robot's drifting poses).
+  double dynamic_travel_m = 0.0;
+  bool moving = false;  ///< Counted as moving (CleanConfig): every beam of it removed.
   std::int64_t beams = 0, beams_removed = 0;
 };
 

@@ -24,8 +24,8 @@ import json, math, sys
 import rosbag
 
 # Removed labels: dispel filter's 1 dynamic and 2 unknown; dispel clean's `_clean_labels` adds 5
-# (moved at another time) and 6 (place seen through).
-REMOVED = (1, 2, 5, 6)
+# (moved at another time), 6 (place seen through) and 8 (a leg at range that walked).
+REMOVED = (1, 2, 5, 6, 8)
 INVALID = 4
 
 def main():

@@ -4,7 +4,7 @@ leg_tracker demo), without annotations, by the rule of the test FilterJobOnRecor
 whose valid ranges over the whole recording spread (10th to 90th percentile) under 5 cm and that
 is valid in 90 % of the scans sees a wall, and counts as one in a scan when within 5 cm of its
 median; a return more than 30 cm nearer than its beam's 90th percentile is a walker. The first
-20 scans are left out. Labels 1, 2, 5 and 6 are removed (dispel filter's and dispel clean's).
+20 scans are left out. Labels 1, 2, 5, 6 and 8 are removed (dispel filter's and dispel clean's).
 
   /usr/bin/python3 tools/static_recording_eval.py OUT.bag LABELS_TOPIC [SCAN_TOPIC]
   e.g. OUT.bag from `dispel clean data/leg_tracker/demo_stationary_simple_environment.bag -o
@@ -40,7 +40,7 @@ def main():
             r = scans[k].ranges[i]
             if not math.isfinite(r):
                 continue
-            removed = labels[k].intensities[i] in (1, 2, 5, 6)
+            removed = labels[k].intensities[i] in (1, 2, 5, 6, 8)
             if wall[i] and abs(r - median[i]) < 0.05:
                 walls += 1
                 walls_kept += not removed

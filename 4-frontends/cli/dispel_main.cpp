@@ -131,6 +131,15 @@ int main(int argc, char** argv) {
           "...and its beams in other scans are removed within this distance (m) of where it moved")
       ->capture_default_str();
   clean_cmd
+      ->add_option("--leg-walk", clean.job.clean.leg_walk_m,
+                   "Legs at range (beams in no object) linked from scan to scan are removed when "
+                   "they walked this far (m); 0: off")
+      ->capture_default_str();
+  clean_cmd
+      ->add_option("--leg-gap", clean.job.clean.leg_max_gap_s,
+                   "...linking a leg across at most this time (s) without it")
+      ->capture_default_str();
+  clean_cmd
       ->add_option("--through-scans", clean.job.clean.through_min_scans,
                    "A small thing (or no object) is removed when this many scans saw through its "
                    "place, 1-20 s later or earlier, before one hit it; 0: off")

@@ -137,7 +137,8 @@ nlohmann::ordered_json clean_stats_json(const jobs::CleanJobOptions& o,
   j["beams_removed"] = {{"online", c.removed_online},
                         {"moved_later", c.moved_later},
                         {"vacated", c.vacated},
-                        {"total", c.removed_online + c.moved_later + c.vacated}};
+                        {"walked_legs", c.walked_legs},
+                        {"total", c.removed()}};
   j["beams_restored"] = c.restored;
   j["online_beams_removed"] = {{"dynamic", s.online.beams_removed_dynamic},
                                {"unknown", s.online.beams_removed_unknown}};
@@ -151,7 +152,9 @@ nlohmann::ordered_json clean_stats_json(const jobs::CleanJobOptions& o,
                  {"through_gap_s", o.clean.through_gap_s},
                  {"through_horizon_s", o.clean.through_horizon_s},
                  {"free_margin_m", o.clean.free_margin_m},
-                 {"max_range_m", o.clean.max_range_m}};
+                 {"max_range_m", o.clean.max_range_m},
+                 {"leg_walk_m", o.clean.leg_walk_m},
+                 {"leg_max_gap_s", o.clean.leg_max_gap_s}};
   nlohmann::ordered_json objects = nlohmann::ordered_json::array();
   for (const CleanedObject& x : s.objects) {
     if (x.dynamic_scans == 0 && x.beams_removed == 0) continue;  // Static throughout.
@@ -285,12 +288,13 @@ int run_clean(CleanCommandOptions options) {
   for (const CleanedObject& x : stats.objects) moving += x.moving ? 1 : 0;
   std::printf(
       "dispel clean: %lld scans, %lld valid beams; removed %lld (online %lld, moved at another "
-      "time %lld, left later %lld), %lld restored; %lld of %zu objects moved; %.2f s + %.2f s\n"
+      "time %lld, left later %lld, walked legs %lld), %lld restored; %lld of %zu objects moved; "
+      "%.2f s + %.2f s\n"
       "wrote %s: %lld messages\n",
       static_cast<long long>(stats.scans), static_cast<long long>(c.valid_beams),
-      static_cast<long long>(c.removed_online + c.moved_later + c.vacated),
-      static_cast<long long>(c.removed_online), static_cast<long long>(c.moved_later),
-      static_cast<long long>(c.vacated), static_cast<long long>(c.restored),
+      static_cast<long long>(c.removed()), static_cast<long long>(c.removed_online),
+      static_cast<long long>(c.moved_later), static_cast<long long>(c.vacated),
+      static_cast<long long>(c.walked_legs), static_cast<long long>(c.restored),
       static_cast<long long>(moving), stats.objects.size(), stats.first_pass_s, stats.second_pass_s,
       options.job.filter.output.c_str(), static_cast<long long>(stats.messages_out));
   std::fflush(stdout);

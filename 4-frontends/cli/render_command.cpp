@@ -40,9 +40,10 @@ int run_render(RenderCommandOptions options) {
         result.labelled ? "" : " (not filtered)", static_cast<long long>(result.points_kept),
         static_cast<long long>(result.points_dynamic),
         static_cast<long long>(result.points_unknown),
-        result.points_moved_later + result.points_vacated > 0
+        result.points_removed_offline() > 0
             ? (", " + std::to_string(result.points_moved_later) + " moved at another time, " +
-               std::to_string(result.points_vacated) + " place seen through")
+               std::to_string(result.points_vacated) + " place seen through, " +
+               std::to_string(result.points_walked_legs) + " walked legs")
                   .c_str()
             : "",
         result.scans_without_pose > 0

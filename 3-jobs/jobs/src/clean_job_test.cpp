@@ -77,8 +77,10 @@ void filter_and_clean(const std::string& scenario_name, std::uint64_t seed, Filt
 
 // People who stand for 10-20 s and then walk off (config/scenarios/stand_then_leave.yaml, seed
 // 1), filtered online and cleaned offline: the cleaner removes far more of the people while they
-// stand (the online filter cannot know yet that they will walk) and keeps the walls. Measured:
-// still people removed 0.087 online, 0.285 clean; moving 0.597, 0.620; walls kept 1.0000, 1.0000.
+// stand (the online filter cannot know yet that they will walk) and keeps the walls; legs at
+// range, too few beams for an object, are followed from scan to scan and removed where they
+// walked. Measured: still people removed 0.087 online, 0.285 clean; moving 0.597, 0.787 (0.620
+// without the legs at range); walls kept 1.0000, 0.99996.
 TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
   FilterJobOptions f;
   f.scale_to_scanner = true;
@@ -93,7 +95,8 @@ TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
   EXPECT_GT(clean.still_beams, 5000);
   EXPECT_GE(clean.still_removed_rate(), 0.25);
   EXPECT_GE(clean.still_removed_rate(), 3.0 * online.still_removed_rate());
-  EXPECT_GE(clean.rejection_rate(), online.rejection_rate());
+  EXPECT_GE(clean.rejection_rate(), online.rejection_rate() + 0.15);
+  EXPECT_GT(stats.counts.walked_legs, 300);
   EXPECT_GE(clean.preservation_rate(), 0.9999);
 
   // Every scan has its cleaned copy and its labels; a beam is NaN exactly where it is removed.
@@ -114,8 +117,7 @@ TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
       removed_beams += removed(label) ? 1 : 0;
     }
   }
-  EXPECT_EQ(removed_beams,
-            stats.counts.removed_online + stats.counts.moved_later + stats.counts.vacated);
+  EXPECT_EQ(removed_beams, stats.counts.removed());
   // The objects it reports: those that moved, with when.
   int moving = 0;
   for (const CleanedObject& o : stats.objects) {
@@ -167,8 +169,7 @@ TEST(CleanJob, RealRobotWithoutPeopleKeepsItsWalls) {
     const CleanJobStats stats = run_clean_job(c);
     EXPECT_TRUE(stats.laser_only);
     EXPECT_GT(stats.counts.valid_beams, 200000);
-    const std::int64_t removed_beams =
-        stats.counts.removed_online + stats.counts.moved_later + stats.counts.vacated;
+    const std::int64_t removed_beams = stats.counts.removed();
     EXPECT_LE(static_cast<double>(removed_beams),
               0.001 * static_cast<double>(stats.counts.valid_beams))
         << laser;

@@ -86,14 +86,16 @@ void for_each_point(const LaserScan& scan, const Pose2& pose, Fn&& fn) {
 }
 
 // A point's class by its label: dispel filter's (1 dynamic, 2 unknown) or dispel clean's, which
-// adds two removed ones (5 moved at another time, 6 place seen through); every other label is kept.
+// adds three removed ones (5 moved at another time, 6 place seen through, 8 walked leg in no
+// object); every other label is kept.
 enum PointClass : int {
   kKeptClass = 0,
   kDynamicClass = 1,
   kUnknownClass = 2,
   kMovedLaterClass = 3,
   kVacatedClass = 4,
-  kClassCount = 5
+  kWalkedLegClass = 5,
+  kClassCount = 6
 };
 
 PointClass point_class(float value) {
@@ -108,6 +110,8 @@ PointClass point_class(float value) {
       return kMovedLaterClass;
     case CleanLabel::kVacated:
       return kVacatedClass;
+    case CleanLabel::kWalkedLeg:
+      return kWalkedLegClass;
     case CleanLabel::kStatic:
     case CleanLabel::kNoObject:
     case CleanLabel::kInvalid:
@@ -117,8 +121,9 @@ PointClass point_class(float value) {
   return kKeptClass;
 }
 
-constexpr Rgb kRemovedColours[kClassCount] = {colours::kKept, colours::kDynamic, colours::kUnknown,
-                                              colours::kMovedLater, colours::kVacated};
+constexpr Rgb kRemovedColours[kClassCount] = {colours::kKept,    colours::kDynamic,
+                                              colours::kUnknown, colours::kMovedLater,
+                                              colours::kVacated, colours::kWalkedLeg};
 
 std::uint32_t pixel_value(Rgb c) {
   return 0xFF000000U | (static_cast<std::uint32_t>(c.r) << 16) |
@@ -293,9 +298,9 @@ RenderResult render_map(const Scene& scene, const RenderOptions& o,
         const bool has_labels = result.labelled && scan.intensities.size() == scan.size();
         for_each_point(scan, pose, [&](const Eigen::Vector2d& p, std::size_t i) {
           const PointClass c = has_labels ? point_class(scan.intensities[i]) : kKeptClass;
-          std::int64_t* counts[kClassCount] = {&result.points_kept, &result.points_dynamic,
+          std::int64_t* counts[kClassCount] = {&result.points_kept,    &result.points_dynamic,
                                                &result.points_unknown, &result.points_moved_later,
-                                               &result.points_vacated};
+                                               &result.points_vacated, &result.points_walked_legs};
           ++*counts[c];
           const Eigen::Vector2d px = t.to_pixel(p);
           raster.add(static_cast<int>(std::floor(px.x())) - l.plot_x,
@@ -346,8 +351,8 @@ RenderResult render_map(const Scene& scene, const RenderOptions& o,
   }
   draw_text(cr, l.plot_x, l.subtitle_y, sub, 0.9 * f, TextAlign::kLeft, false, {80, 80, 80});
   double x = l.plot_x;
-  // dispel clean's labels take two more swatches: the legend's texts are shorter then.
-  const bool cleaned = result.points_moved_later + result.points_vacated > 0;
+  // dispel clean's labels take three more swatches: the legend's texts are shorter then.
+  const bool cleaned = result.points_removed_offline() > 0;
   if (result.labelled && !cleaned) {
     x = legend_swatch(cr, x, l.legend_y, f, colours::kKept, "kept");
     x = legend_swatch(cr, x, l.legend_y, f, colours::kDynamic, "removed: dynamic (label 1)");
@@ -356,15 +361,16 @@ RenderResult render_map(const Scene& scene, const RenderOptions& o,
     x = legend_swatch(cr, x, l.legend_y, f, colours::kKept, "kept");
     x = legend_swatch(cr, x, l.legend_y, f, colours::kDynamic, "removed: dynamic (1)");
     x = legend_swatch(cr, x, l.legend_y, f, colours::kUnknown, "unknown (2)");
-    x = legend_swatch(cr, x, l.legend_y, f, colours::kMovedLater, "moved at another time (5)");
+    x = legend_swatch(cr, x, l.legend_y, f, colours::kMovedLater, "moved elsewhen (5)");
     x = legend_swatch(cr, x, l.legend_y, f, colours::kVacated, "seen through (6)");
+    x = legend_swatch(cr, x, l.legend_y, f, colours::kWalkedLeg, "walked leg (8)");
   } else {
     x = legend_swatch(cr, x, l.legend_y, f, colours::kKept,
                       "points (not filtered: no " + labels_topic + ")");
   }
   if (!path.empty()) x = legend_line(cr, x, l.legend_y, f, colours::kTrajectory, "robot path");
-  const std::int64_t removed = result.points_dynamic + result.points_unknown +
-                               result.points_moved_later + result.points_vacated;
+  const std::int64_t removed =
+      result.points_dynamic + result.points_unknown + result.points_removed_offline();
   draw_text(cr, canvas.width() - l.plot_x, l.legend_y,
             std::string(cleaned ? "" : "grey \u2192 black: hit more often; ") +
                 std::to_string(removed) + " of " + std::to_string(removed + result.points_kept) +

@@ -116,6 +116,7 @@ struct MapBagOptions {
   // dispel clean's output instead: /scan_clean and /scan_clean_labels, the person's beams label 5
   // in the first 25 scans and 6 in the last 15, the pillar's 7 (restored, kept).
   bool cleaned = false;
+  bool walked_leg = false;  // With cleaned: the person's beams label 8 in every scan instead.
 };
 
 // The robot drives along x at 0.5 m/s for 4 s (40 scans at 10 Hz), with odometry on /odom and
@@ -149,7 +150,7 @@ std::string write_map_bag(const std::string& name, const MapBagOptions& opt) {
       msg.intensities.assign(msg.ranges.size(), 0.0F);
       for (std::size_t i = 0; i < hit.size(); ++i) {
         if (hit[i] == kPersonShape)
-          msg.intensities[i] = opt.cleaned ? (k < 25 ? 5.0F : 6.0F) : 1.0F;
+          msg.intensities[i] = opt.walked_leg ? 8.0F : opt.cleaned ? (k < 25 ? 5.0F : 6.0F) : 1.0F;
         if (hit[i] == 4 && opt.cleaned) msg.intensities[i] = 7.0F;
         if (hit[i] == sim::kNoHit) msg.intensities[i] = 4.0F;
       }
@@ -252,6 +253,19 @@ TEST(RenderMap, CleanedBagDrawsEachReasonForRemovalInItsColour) {
   const Rgb pillar = pic.at(r.transform.to_pixel(map_point(20, pillar_beam, pillar_range)));
   EXPECT_TRUE(pillar.r == pillar.g && pillar.g == pillar.b && pillar.r <= colours::kKeptFaint.r)
       << describe(pillar);
+  std::remove(o.input.c_str());
+  std::remove(o.output.c_str());
+
+  // A walked leg in no object (8): its own colour, counted apart.
+  b.walked_leg = true;
+  o = map_options(write_map_bag("walked_leg.bag", b), temp_path("walked_leg.png"));
+  o.scan_topic = "/scan_clean";
+  const RenderResult legs = render_bag(o);
+  EXPECT_GT(legs.points_walked_legs, 40 * 10);
+  EXPECT_EQ(legs.points_moved_later + legs.points_vacated, 0);
+  const Picture leg_pic(o.output);
+  ASSERT_TRUE(leg_pic.ok());
+  EXPECT_EQ(leg_pic.at(legs.transform.to_pixel(map_point(0, beam, range))), colours::kWalkedLeg);
   std::remove(o.input.c_str());
   std::remove(o.output.c_str());
 }

@@ -9,6 +9,8 @@
 ///   was not found moving, only once the scanner saw through its place after it moved on), and
 /// - optionally (CleanConfig::through_min_scans), a small thing whose place the scanner saw
 ///   through later or earlier (what stood there left, or was not there yet),
+/// - legs at range, too few beams for an object of the online filter's: runs of beams in no object
+///   that it links from scan to scan itself, when they walked (CleanConfig::leg_walk_m),
 /// and keeps what the online filter took for moving only for a moment and never again (a wall
 /// piece whose outline slid for a scan or two). Both directions in time: what an object did later
 /// decides about its earlier beams, and what the scanner saw at other times decides about a place.
@@ -19,7 +21,7 @@
 /// Memory: per scan, its stamp, pose, motion and geometry (about 100 bytes), five bytes per beam
 /// (the online label, the online object, the range in cm) and 13 per object (its track, the
 /// track's position, its width); per track a summary (about 100 bytes) and 12 bytes per scan in
-/// which it was dynamic.
+/// which it was dynamic; per run of beams in no object 24 bytes, and 4 in its chain.
 
 #include <cmath>
 #include <cstdint>
@@ -63,6 +65,14 @@ struct CleanConfig {
   double free_margin_m = 0.3;
   /// Places farther than this (m) from the scanner are not asked about.
   double max_range_m = 20.0;
+  /// Legs at range: runs of beams in no object (too few for N_min), narrow, in front of what is
+  /// beside them, are linked from scan to scan into chains. The runs of a chain that went at least
+  /// this far (m) from where it began are removed while it moved, and before that where the
+  /// scanner saw through the place after it left (label kWalkedLeg). 0: off.
+  double leg_walk_m = 1.0;
+  /// A chain links runs at most this far apart in time (s). A far leg is missed in a scan now
+  /// and then; a sporadic return (speckle) is there in one scan and not in the next ones.
+  double leg_max_gap_s = 0.3;
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -78,19 +88,23 @@ enum class CleanLabel : std::uint8_t {
   kMovedLater = 5,  ///< Removed: its object moved at another time (retroactive removal).
   kVacated = 6,   ///< Removed: the scanner saw through its place later or earlier (it left, came).
   kRestored = 7,  ///< Kept: the online filter removed it, but its object never moved.
+  /// Removed: in no object (a leg at range, too few beams for one) on a chain of such runs of
+  /// beams that walked (CleanConfig::leg_walk_m).
+  kWalkedLeg = 8,
 };
 
 /// True for the labels whose beams are removed (NaN in `<scan>_clean`).
 inline bool removed(CleanLabel label) {
   return label == CleanLabel::kDynamic || label == CleanLabel::kUnknown ||
-         label == CleanLabel::kMovedLater || label == CleanLabel::kVacated;
+         label == CleanLabel::kMovedLater || label == CleanLabel::kVacated ||
+         label == CleanLabel::kWalkedLeg;
 }
 
 /// The label a labels topic's intensity holds (`<scan>_clean_labels`, or `<scan>_labels`, whose
-/// BeamLabel values 0-4 mean the same); nothing for a value that is no label (negative, above 7,
+/// BeamLabel values 0-4 mean the same); nothing for a value that is no label (negative, above 8,
 /// fractional, NaN).
 inline std::optional<CleanLabel> clean_label(float value) {
-  if (!(value >= 0.0F && value <= 7.0F) || value != std::floor(value)) return std::nullopt;
+  if (!(value >= 0.0F && value <= 8.0F) || value != std::floor(value)) return std::nullopt;
   return static_cast<CleanLabel>(static_cast<std::uint8_t>(value));
 }
 
@@ -116,6 +130,9 @@ struct CleanCounts {
   std::int64_t valid_beams = 0;
   std::int64_t removed_online = 0;  ///< kDynamic + kUnknown.
   std::int64_t moved_later = 0, vacated = 0, restored = 0;
+  std::int64_t walked_legs = 0;  ///< kWalkedLeg.
+  /// Every beam removed, whatever the reason.
+  std::int64_t removed() const { return removed_online + moved_later + vacated + walked_legs; }
 };
 
 /// Two passes over a recording: add() each scan with what the online filter made of it, in time
@@ -190,8 +207,34 @@ class OfflineCleaner {
   bool near_where_it_moved(const Track& track, double stamp_s,
                            const Eigen::Vector2f& position) const;
 
+  // A run of beams in no object (too few for N_min), narrow, in front of what is beside it: a leg
+  // at range (with the other leg beside it, merged), a small static thing, or speckle.
+  struct Run {
+    std::uint32_t scan = 0;
+    std::uint16_t first = 0, last = 0;
+    std::uint16_t first2 = kNone, last2 = 0;  // The other leg's beams, when merged into it.
+    std::uint16_t beams = 0;
+    bool removed = false;
+    Eigen::Vector2f at = Eigen::Vector2f::Zero();  // Its centre in the fixed frame.
+  };
+  // Runs linked from scan to scan: each to the nearest run to where the chain was heading.
+  struct Chain {
+    std::vector<std::uint32_t> runs;  // Into runs_, in time order.
+    Eigen::Vector2f velocity = Eigen::Vector2f::Zero();
+    double last_s = 0.0;
+  };
+  // Pass 1: scan @p k's runs, linked to the open chains.
+  void add_runs(std::size_t k);
+  // finish(): which runs of which chains are removed.
+  void decide_runs();
+
   CleanConfig config_;
   std::vector<ScanRecord> scans_;
+  std::vector<Run> runs_;
+  std::vector<std::uint32_t> runs_begin_;  // Per scan: the index of its first run in runs_.
+  std::vector<Chain> chains_;
+  std::vector<std::uint32_t> open_chains_;   // Chains a run of the next scan may extend.
+  std::vector<std::uint8_t> in_walked_leg_;  // label(): per beam, in a removed run.
   std::vector<Track> tracks_;
   std::unordered_map<std::uint64_t, std::uint32_t> track_index_;
   BeamDirections directions_;

@@ -45,6 +45,7 @@ inline constexpr Rgb kDynamic{215, 38, 38};         ///< Removed, label 1.
 inline constexpr Rgb kUnknown{245, 145, 0};         ///< Removed, label 2 (presumption of guilt).
 inline constexpr Rgb kMovedLater{140, 60, 200};     ///< Removed by dispel clean, label 5.
 inline constexpr Rgb kVacated{0, 160, 170};         ///< Removed by dispel clean, label 6.
+inline constexpr Rgb kWalkedLeg{225, 80, 160};      ///< Removed by dispel clean, label 8.
 inline constexpr Rgb kTrajectory{33, 102, 172};     ///< The robot's path.
 inline constexpr Rgb kNoise{165, 165, 165};         ///< Scan view: a valid beam in no object.
 inline constexpr Rgb kMaskedSector{222, 222, 235};  ///< Scan view: masked sectors' shade.
@@ -116,9 +117,14 @@ struct RenderResult {
   std::int64_t points_unknown = 0;
   std::int64_t points_moved_later = 0;  ///< `dispel clean`'s label 5.
   std::int64_t points_vacated = 0;      ///< `dispel clean`'s label 6.
-  double from_s = 0.0, to_s = 0.0;      ///< The window drawn, seconds from the bag's start.
-  std::int64_t objects = 0;             ///< Scan view: objects in the segmentation.
-  std::vector<DrawnTrack> tracks;       ///< Scan view.
+  std::int64_t points_walked_legs = 0;  ///< `dispel clean`'s label 8.
+  /// Points removed by `dispel clean` beyond the online filter's labels (5, 6 and 8).
+  std::int64_t points_removed_offline() const {
+    return points_moved_later + points_vacated + points_walked_legs;
+  }
+  double from_s = 0.0, to_s = 0.0;  ///< The window drawn, seconds from the bag's start.
+  std::int64_t objects = 0;         ///< Scan view: objects in the segmentation.
+  std::vector<DrawnTrack> tracks;   ///< Scan view.
 };
 
 /// Renders the bag. The output appears only when complete. @throws jobs::JobError

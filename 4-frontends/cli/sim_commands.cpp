@@ -86,7 +86,11 @@ int run_eval(const EvalOptions& o) {
                       {"still",
                        {{"beams", r.still_beams},
                         {"removed", r.still_removed},
-                        {"removed_rate", number_or_null(r.still_removed_rate())}}}};
+                        {"removed_rate", number_or_null(r.still_removed_rate())}}},
+                      {"still_moves_later",
+                       {{"beams", r.still_moves_later_beams},
+                        {"removed", r.still_moves_later_removed},
+                        {"removed_rate", number_or_null(r.still_moves_later_removed_rate())}}}};
     j["scans"] = r.scans;
     if (map) {
       const auto comparison = [](const eval::MapComparison& c) {
@@ -119,6 +123,9 @@ int run_eval(const EvalOptions& o) {
               static_cast<long long>(r.actors_removed), static_cast<long long>(r.actors_seen));
   std::printf("%-34s %10.4f  (%lld beams; reported, not a target)\n", "still actors removed",
               r.still_removed_rate(), static_cast<long long>(r.still_beams));
+  std::printf("%-34s %10.4f  (%lld beams of actors seen moving later)\n",
+              "  of them, moving later, removed", r.still_moves_later_removed_rate(),
+              static_cast<long long>(r.still_moves_later_beams));
   if (map) {
     std::printf(
         "map (%.2f m cells, %lld scans from the true poses): the oracle's scans occupy "

@@ -24,6 +24,7 @@ void BeamEvaluator::add_scan(double stamp_s, const std::vector<std::uint8_t>& tr
   }
   ++rates_.scans;
   std::map<std::int32_t, std::pair<int, int>> moving_beams;  // actor -> (beams, removed)
+  std::map<std::int32_t, std::pair<int, int>> still_beams;   // actor -> (beams, removed)
   for (std::size_t i = 0; i < truth.size(); ++i) {
     switch (truth[i]) {
       case kTruthStatic:
@@ -42,12 +43,21 @@ void BeamEvaluator::add_scan(double stamp_s, const std::vector<std::uint8_t>& tr
       case kTruthStill:
         ++rates_.still_beams;
         rates_.still_removed += removed[i] ? 1 : 0;
+        if (actor[i] > 0) {
+          auto& [beams, rem] = still_beams[actor[i]];
+          ++beams;
+          rem += removed[i] ? 1 : 0;
+        }
         break;
       default:
         break;
     }
   }
+  for (const auto& [id, counts] : still_beams) {
+    still_.push_back({id, stamp_s, counts.first, counts.second});
+  }
   for (const auto& [id, counts] : moving_beams) {
+    last_moving_s_[id] = stamp_s;
     if (counts.first < min_beams_) continue;
     ActorTimes& t = actors_[id];
     if (std::isnan(t.first_seen)) t.first_seen = stamp_s;
@@ -57,6 +67,12 @@ void BeamEvaluator::add_scan(double stamp_s, const std::vector<std::uint8_t>& tr
 
 Rates BeamEvaluator::result() const {
   Rates r = rates_;
+  for (const StillScan& s : still_) {
+    const auto last = last_moving_s_.find(s.actor);
+    if (last == last_moving_s_.end() || !(s.stamp_s < last->second)) continue;
+    r.still_moves_later_beams += s.beams;
+    r.still_moves_later_removed += s.removed;
+  }
   for (const auto& [id, t] : actors_) {
     ++r.actors_seen;
     if (!std::isnan(t.first_removed)) {

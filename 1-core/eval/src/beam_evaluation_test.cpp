@@ -21,6 +21,27 @@ TEST(BeamEvaluator, CountsRatesPerClassAndF1) {
   EXPECT_THROW(e.add_scan(2.0, {0}, {0, 0}, {false}), std::invalid_argument);
 }
 
+// Actor 1 stands (scans 1-2), walks (3), stands again to the end (4); actor 2 only stands. The
+// still beams of the actor seen moving later are counted apart: those an offline filter should
+// remove; the rest are of what arrived and stayed, or never moved in view.
+TEST(BeamEvaluator, StillBeamsOfActorsSeenMovingLaterAreCountedApart) {
+  BeamEvaluator e(1);
+  const std::vector<std::int32_t> actors = {1, 1, 2};
+  e.add_scan(1.0, {2, 2, 2}, actors, {true, false, false});
+  e.add_scan(2.0, {2, 2, 2}, actors, {true, true, true});
+  e.add_scan(3.0, {1, 1, 2}, actors, {true, true, false});
+  e.add_scan(4.0, {2, 2, 2}, actors, {false, false, true});
+  const Rates r = e.result();
+  EXPECT_EQ(r.still_beams, 10);
+  EXPECT_EQ(r.still_removed, 5);
+  EXPECT_EQ(r.still_moves_later_beams, 4);  // Actor 1 in scans 1 and 2.
+  EXPECT_EQ(r.still_moves_later_removed, 3);
+  EXPECT_DOUBLE_EQ(r.still_moves_later_removed_rate(), 0.75);
+  BeamEvaluator none(1);
+  none.add_scan(1.0, {2}, {1}, {true});
+  EXPECT_TRUE(std::isnan(none.result().still_moves_later_removed_rate()));
+}
+
 TEST(BeamEvaluator, LatencyRunsFromFirstSightToFirstScanWithHalfTheBeamsRemoved) {
   BeamEvaluator e(2);
   const std::vector<std::uint8_t> truth = {1, 1, 1, 1, 0};

@@ -95,6 +95,11 @@ TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
   EXPECT_GT(clean.still_beams, 5000);
   EXPECT_GE(clean.still_removed_rate(), 0.25);
   EXPECT_GE(clean.still_removed_rate(), 3.0 * online.still_removed_rate());
+  // Of them, those who walk off later (the rest walked in and stay to the end): 0.029 online,
+  // 0.453 clean.
+  EXPECT_GT(clean.still_moves_later_beams, 2000);
+  EXPECT_GE(clean.still_moves_later_removed_rate(), 0.4);
+  EXPECT_GE(clean.still_moves_later_removed_rate(), 10.0 * online.still_moves_later_removed_rate());
   EXPECT_GE(clean.rejection_rate(), online.rejection_rate() + 0.15);
   EXPECT_GT(stats.counts.walked_legs, 300);
   EXPECT_GE(clean.preservation_rate(), 0.9999);

@@ -20,12 +20,19 @@ struct Rates {
   std::int64_t static_beams = 0, static_kept = 0;
   std::int64_t moving_beams = 0, moving_removed = 0;
   std::int64_t still_beams = 0, still_removed = 0;
+  /// Of the still beams, those of an actor that the scanner sees moving later (someone who stands
+  /// and then walks off); the others are of an actor after it last moved in view (someone who
+  /// walked in and stayed), or of no known actor.
+  std::int64_t still_moves_later_beams = 0, still_moves_later_removed = 0;
   std::int64_t scans = 0;
   std::int64_t actors_seen = 0;     ///< Moving actors that appeared in a scan.
   std::int64_t actors_removed = 0;  ///< ... and were removed at some point.
   double preservation_rate() const { return ratio(static_kept, static_beams); }
   double rejection_rate() const { return ratio(moving_removed, moving_beams); }
   double still_removed_rate() const { return ratio(still_removed, still_beams); }
+  double still_moves_later_removed_rate() const {
+    return ratio(still_moves_later_removed, still_moves_later_beams);
+  }
   /// Harmonic mean of preservation and rejection.
   double f1() const {
     const double p = preservation_rate(), r = rejection_rate();
@@ -61,9 +68,17 @@ class BeamEvaluator {
     double first_seen = std::numeric_limits<double>::quiet_NaN();
     double first_removed = std::numeric_limits<double>::quiet_NaN();
   };
+  // An actor's still beams in one scan.
+  struct StillScan {
+    std::int32_t actor = 0;
+    double stamp_s = 0.0;
+    std::int32_t beams = 0, removed = 0;
+  };
   int min_beams_;
   Rates rates_;
   std::map<std::int32_t, ActorTimes> actors_;
+  std::vector<StillScan> still_;
+  std::map<std::int32_t, double> last_moving_s_;  // Per actor: the last scan it moved in.
 };
 
 }  // namespace dispel::eval

@@ -116,8 +116,9 @@ TEST(OfflineCleaner, ATrackMovedOnlyIfItTravelledWhileFoundDynamic) {
       cleaner.add(at_k, box_tracked(at_k, 7, position, dynamic));
     }
     cleaner.finish();
-    ASSERT_EQ(cleaner.objects().size(), 1U);
-    const CleanedObject& o = cleaner.objects().front();
+    const std::vector<CleanedObject> objects = cleaner.objects();  // A copy: keep it.
+    ASSERT_EQ(objects.size(), 1U);
+    const CleanedObject& o = objects.front();
     EXPECT_EQ(o.dynamic_scans, 3);
     EXPECT_NEAR(o.travel_m, 3.8, 1e-9);
     EXPECT_NEAR(o.dynamic_travel_m, 2 * step_while_dynamic, 1e-6);

@@ -51,6 +51,7 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
   j["laser_only"] = s.laser_only;
   j["beams_kept_explained"] = s.counters.beams_kept_explained;
   j["registration"] = {{"enabled", s.config.registration.enabled},
+                       {"align", s.config.registration.align},
                        {"registered", s.counters.scans_registered},
                        {"fallbacks", s.counters.registration_fallbacks},
                        {"degenerate", s.counters.registration_degenerate},

@@ -708,7 +708,7 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
                        config_.min_threshold_m, config_.max_threshold_m)
           : config_.initial_threshold_m;
   report.threshold_m = threshold;
-  if (have_previous_ && !map_.empty()) {
+  if (have_previous_ && !map_.empty() && config_.align) {
     if (report.points < config_.min_points) {
       report.fallback = true;
     } else {

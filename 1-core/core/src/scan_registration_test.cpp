@@ -391,6 +391,39 @@ TEST(ScanRegistration, ReturnsFarFromTheSeedStillFindTheirCorrespondences) {
               report.points, report.inlier_share);
 }
 
+// A sensor known not to move (align false): each scan stays at the pose given, even when the
+// scan itself says otherwise, and the map is still built for what it explains. The posts seen
+// from 5 cm and 1 degree away, with the odometry at the identity: aligned, the pose moves toward
+// the scan's; not aligned, it is the identity, exactly.
+TEST(ScanRegistration, AScanOfASensorThatDoesNotMoveStaysAtThePoseGiven) {
+  for (const bool align : {true, false}) {
+    RegistrationConfig config;
+    config.align = align;
+    config.min_points_with_odometry = config.min_points;  // The posts are few points.
+    ScanRegistration reg{config};
+    RegistrationReport report;
+    for (int k = 0; k < 6; ++k) {
+      reg.register_scan(posts_scan(Pose2{}, 0.1 * k), Pose2{}, report);
+      reg.add(std::vector<char>(720, 1), {});
+    }
+    EXPECT_GT(reg.voxel_count(), 10u);
+    const Pose2 off{0.05, 0.0, 1.0 * kDeg};
+    const Pose2 p = reg.register_scan(posts_scan(off, 0.6), Pose2{}, report);
+    if (align) {
+      EXPECT_TRUE(report.registered);
+      // Toward the scan's pose (the odometry's low noise holds some of it back).
+      EXPECT_GT(p.translation().dot(off.translation().normalized()), 0.01);
+      EXPECT_GT(p.yaw_rad, 0.2 * kDeg);
+    } else {
+      EXPECT_FALSE(report.registered);
+      EXPECT_FALSE(report.fallback);
+      EXPECT_EQ(p.x_m, 0.0);
+      EXPECT_EQ(p.y_m, 0.0);
+      EXPECT_EQ(p.yaw_rad, 0.0);
+    }
+  }
+}
+
 // The scanner still for six scans, then driving 0.3 m a scan of 0.1 s (3 m/s) past the posts,
 // then a scan with nothing in it (it falls back to the constant-velocity guess). On a robot that
 // can drive 1 m/s the guess never exceeds that (counted), so the empty scan moves the pose by at

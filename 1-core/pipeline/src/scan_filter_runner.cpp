@@ -29,6 +29,7 @@ void ScanFilterRunnerOptions::validate() const {
 
 ScanFilterRunner::ScanFilterRunner(ScanFilterRunnerOptions options)
     : options_((options.validate(), std::move(options))), period_(options_.scan_period_s) {
+  if (options_.static_sensor) options_.config.registration.align = false;
   if (options_.scale_to_scanner) {
     free_space_.emplace(options_.config.free_space);
   } else {

@@ -191,6 +191,7 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   RegistrationConfig& g = c.registration;
   b.section("registration");
   b.boolean("registration.enabled", g.enabled);
+  b.boolean("registration.align", g.align);
   b.number("registration.voxel_size_m", g.voxel_size_m);
   b.integer("registration.max_points_per_voxel", g.max_points_per_voxel);
   b.number("registration.scan_spacing_m", g.scan_spacing_m);

@@ -43,7 +43,7 @@ CleanJobStats run_clean_job(const CleanJobOptions& options, const Progress& prog
 
   // Pass 1: the online filter over every scan; the cleaner remembers what it found.
   const auto first_start = std::chrono::steady_clock::now();
-  pipeline::ScanFilterRunner runner({config, o.scale_to_scanner, 0.0});
+  pipeline::ScanFilterRunner runner({config, o.scale_to_scanner, 0.0, o.static_sensor});
   as_job([&] {
     in->read({o.scan_topic}, [&](const io::RecordedMessage& m) {
       const std::optional<io::ScanMessage> scan = m.scan();

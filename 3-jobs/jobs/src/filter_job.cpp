@@ -30,7 +30,7 @@ void check_period(const FilterJobOptions& o, const std::optional<double>& period
 class ScanFilter {
  public:
   ScanFilter(const FilterJobOptions& o, FilterJobStats& stats)
-      : runner_({filter_config(o), o.scale_to_scanner, 0.0}), stats_(stats) {}
+      : runner_({filter_config(o), o.scale_to_scanner, 0.0, o.static_sensor}), stats_(stats) {}
 
   // @p why: why @p pose is std::nullopt (counted as odometry_<why>).
   const FilterResult& process(const LaserScan& scan, double stated_period_s,

@@ -42,7 +42,7 @@ RenderResult render_scan(const Scene& scene, const RenderOptions& o,
   if (o.config_path) base = jobs::as_job([&] { return io::load_filter_config(*o.config_path); });
 
   // Run the filter over the scans up to the one asked for, as dispel filter runs it.
-  pipeline::ScanFilterRunner runner({base, o.scale_to_scanner, 0.0});
+  pipeline::ScanFilterRunner runner({base, o.scale_to_scanner, 0.0, o.static_sensor});
   FilterResult filtered;
   LaserScan scan;
   Pose2 sensor_pose;

@@ -45,6 +45,7 @@ FilterNodeSettings read_settings(const std::string& node_name) {
   s.fixed_frame = io::FrameTree::normalise(p.text("fixed_frame", s.fixed_frame));
   if (s.fixed_frame.empty()) throw ParameterError(node_name + "/fixed_frame must not be empty");
   s.static_sensor = p.boolean("static_sensor", s.static_sensor);
+  s.runner.static_sensor = s.static_sensor;
   s.transform_timeout_s = p.number("transform_timeout_s", s.transform_timeout_s);
   p.require(std::isfinite(s.transform_timeout_s) && s.transform_timeout_s >= 0.0,
             "transform_timeout_s", "a finite number >= 0", s.transform_timeout_s);

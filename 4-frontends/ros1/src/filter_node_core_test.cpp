@@ -46,6 +46,7 @@ std::int64_t expect_node_equals_dispel_filter(const std::string& bag, const std:
 
   pipeline::ScanFilterRunnerOptions options;  // The node's defaults: dispel's, scaled.
   options.scale_to_scanner = true;
+  options.static_sensor = true;
   FilterNodeCore node(options);
   const std::vector<sensor_msgs::LaserScan>& scans = offline.at("/scan");
   const std::vector<sensor_msgs::LaserScan>& labels = offline.at("/scan_labels");

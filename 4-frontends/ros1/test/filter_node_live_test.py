@@ -2,7 +2,8 @@
 """dispel_filter_node, live: the leg_tracker recording (a stationary Hokuyo, people walking past)
 played with rosbag play into the node, with the sensor pose from a static TF (/odom -> laser,
 written with the leading slash older recordings use), and the output received by the test itself
-(roslive.Listener).
+(roslive.Listener). The pose is exact, so the scans are not aligned (registration/align false, as
+--static-sensor has it).
 
 Checks: one filtered scan and one label scan per input scan, with its header; the node's output
 equal, scan for scan (by stamp), to `dispel filter --static-sensor --scale-to-scanner` on the same
@@ -83,7 +84,8 @@ def main():
                                 "__name:=static_tf"])
         node = ros.start("dispel_filter", [
             env("FILTER_NODE"), "__name:=dispel_filter", "_fixed_frame:=/odom",
-            "_scale_to_scanner:=true", "_queue_size:=2000", "_transform_timeout_s:=1.0"])
+            "_scale_to_scanner:=true", "_queue_size:=2000", "_transform_timeout_s:=1.0",
+            "_registration/align:=false"])
         ros.wait_for(lambda: ros.subscribed("/scan", "/dispel_filter"), 30,
                      "the filter node did not subscribe to /scan: " + ros.log("dispel_filter"))
         ros.wait_for(lambda: ("/tf_static", "/dispel_filter") in ros.connections("/static_tf"),

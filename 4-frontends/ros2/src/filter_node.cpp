@@ -52,6 +52,7 @@ FilterNodeSettings parse_filter_node_parameters(const std::vector<ParameterText>
   p.boolean("use_sim_time", s.use_sim_time);
   // Everything else is the filter's: the same parser, keys and messages as `dispel filter`.
   s.runner.config = io::parse_filter_config(p.rest_yaml(), origin);
+  s.runner.static_sensor = s.static_sensor;
   try {
     s.runner.validate();
   } catch (const std::invalid_argument& e) {

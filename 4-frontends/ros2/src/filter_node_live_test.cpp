@@ -151,6 +151,7 @@ void play_and_compare(Qos scan_qos, const char* name) {
   pipeline::ScanFilterRunnerOptions options;
   options.config = io::parse_filter_config("{}", "defaults");
   options.scale_to_scanner = true;
+  options.static_sensor = true;
   pipeline::ScanFilterRunner reference(options);
 
   const std::string node_name = "dispel_filter_p" + std::to_string(::getpid());

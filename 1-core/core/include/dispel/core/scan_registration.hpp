@@ -24,6 +24,11 @@ namespace dispel {
 struct RegistrationConfig {
   /// false: the sensor pose is the one given (odometry), as in the thesis.
   bool enabled = true;
+  /// false: each scan is placed at the pose given and not aligned, for a sensor known not to
+  /// move (`--static-sensor`: the identity is exact, and an alignment can only add error:
+  /// people walking past turned the leg_tracker demo's scanner by 0.7 degrees). The map is
+  /// still built, for what it explains.
+  bool align = true;
   double voxel_size_m = 0.25;        ///< Side of a map voxel.
   int max_points_per_voxel = 4;      ///< Points kept per voxel (later ones only count the scan).
   double scan_spacing_m = 0.05;      ///< The scan is thinned to points at least this far apart.

@@ -22,6 +22,9 @@ struct ScanFilterRunnerOptions {
   bool scale_to_scanner = false;
   /// The scanner's period for scale_to_scanner (s); 0: learnt from the scans (ScanPeriod).
   double scan_period_s = 0.0;
+  /// The sensor does not move (`--static-sensor`): the pose given is the identity, exact, and the
+  /// registration does not align the scans (RegistrationConfig::align false).
+  bool static_sensor = false;
 
   /// Throws std::invalid_argument naming the first bad field (the configuration's own, or
   /// scan_period_s).

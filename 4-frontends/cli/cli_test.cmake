@@ -556,7 +556,20 @@ endforeach()
 if(moved LESS 10)
   message(FATAL_ERROR "${moved} objects moved of the demo's walkers: ${clean_stats}")
 endif()
+# A still sensor's poses are exact: the seen-through rule is on (2 scans in a row) unless asked
+# otherwise, and it removes what came and stood (beams vacated).
+string(JSON through GET "${clean_stats}" config through_min_scans)
+string(JSON exact GET "${clean_stats}" config poses_exact)
+string(JSON vacated GET "${clean_stats}" beams_removed vacated)
+if(NOT through EQUAL 2 OR NOT exact OR vacated LESS 1000)
+  message(FATAL_ERROR "a still sensor: through_min_scans ${through}, poses_exact ${exact}, "
+                      "${vacated} beams vacated: ${clean_stats}")
+endif()
+expect_refused(1 "^dispel clean: clean.through_min_scans must be 0 .off. or in .1, 10000., got -2"
+               ${WORK_DIR}/clean_bad.bag ${DISPEL} clean ${BAG} -o ${WORK_DIR}/clean_bad.bag
+               --static-sensor --through-scans -2)
 expect_refused(1 "^dispel clean: clean.moving_min_travel_m must be in .0, 100., got -1"
                ${WORK_DIR}/clean_bad.bag ${DISPEL} clean ${BAG} -o ${WORK_DIR}/clean_bad.bag
                --static-sensor --moving-travel -1)
-message(STATUS "dispel clean: objects moved by their dynamic scans and travel; bad travel refused")
+message(STATUS "dispel clean: objects moved by their dynamic scans and travel; a still sensor's "
+               "places seen through; bad travel and scan counts refused")

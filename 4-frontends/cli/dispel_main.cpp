@@ -142,7 +142,8 @@ int main(int argc, char** argv) {
   clean_cmd
       ->add_option("--through-scans", clean.job.clean.through_min_scans,
                    "A small thing (or no object) is removed when this many scans saw through its "
-                   "place, 1-20 s later or earlier, before one hit it; 0: off")
+                   "place, 1-20 s later or earlier, before one hit it (--static-sensor: in a "
+                   "row, past scans that hit it); 0: off; -1: 2 with --static-sensor, else off")
       ->capture_default_str();
   clean_cmd
       ->add_option("--through-horizon", clean.job.clean.through_horizon_s,

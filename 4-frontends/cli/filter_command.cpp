@@ -145,17 +145,18 @@ nlohmann::ordered_json clean_stats_json(const jobs::CleanJobOptions& o,
                                {"unknown", s.online.beams_removed_unknown}};
   j["first_pass_s"] = s.first_pass_s;
   j["second_pass_s"] = s.second_pass_s;
-  j["config"] = {{"moving_min_scans", o.clean.moving_min_scans},
-                 {"moving_min_travel_m", o.clean.moving_min_travel_m},
-                 {"moved_from_m", o.clean.moved_from_m},
-                 {"max_width_m", o.clean.max_width_m},
-                 {"through_min_scans", o.clean.through_min_scans},
-                 {"through_gap_s", o.clean.through_gap_s},
-                 {"through_horizon_s", o.clean.through_horizon_s},
-                 {"free_margin_m", o.clean.free_margin_m},
-                 {"max_range_m", o.clean.max_range_m},
-                 {"leg_walk_m", o.clean.leg_walk_m},
-                 {"leg_max_gap_s", o.clean.leg_max_gap_s}};
+  j["config"] = {{"moving_min_scans", s.config.moving_min_scans},
+                 {"moving_min_travel_m", s.config.moving_min_travel_m},
+                 {"moved_from_m", s.config.moved_from_m},
+                 {"max_width_m", s.config.max_width_m},
+                 {"through_min_scans", s.config.through_min_scans},
+                 {"through_gap_s", s.config.through_gap_s},
+                 {"through_horizon_s", s.config.through_horizon_s},
+                 {"poses_exact", s.config.poses_exact},
+                 {"free_margin_m", s.config.free_margin_m},
+                 {"max_range_m", s.config.max_range_m},
+                 {"leg_walk_m", s.config.leg_walk_m},
+                 {"leg_max_gap_s", s.config.leg_max_gap_s}};
   nlohmann::ordered_json objects = nlohmann::ordered_json::array();
   for (const CleanedObject& x : s.objects) {
     if (x.dynamic_scans == 0 && x.beams_removed == 0) continue;  // Static throughout.

@@ -360,7 +360,7 @@ bool OfflineCleaner::near_where_it_moved(const Track& track, double stamp_s,
 
 template <typename Window>
 bool OfflineCleaner::through_before_hit(const Eigen::Vector2d& p, std::ptrdiff_t first, int step,
-                                        int needed, Window window) const {
+                                        int needed, Window window, bool alone) const {
   int through = 0;
   for (std::ptrdiff_t j = first; j >= 0 && j < static_cast<std::ptrdiff_t>(scans_.size());
        j += step) {
@@ -368,11 +368,12 @@ bool OfflineCleaner::through_before_hit(const Eigen::Vector2d& p, std::ptrdiff_t
     const int in = window(scans_[k].stamp_s);
     if (in > 0) break;
     if (in < 0) continue;
-    const Look seen = look(k, p);
+    const Look seen = look(k, p, alone);
     if (seen == Look::kThrough) {
       if (++through >= needed) return true;
     } else if (seen == Look::kHit) {
-      return false;  // Still (or again) there.
+      if (!alone || !config_.poses_exact) return false;  // Still (or again) there.
+      through = 0;
     }
   }
   return false;
@@ -429,12 +430,13 @@ constexpr double kMinSlant = 0.5;
 namespace {
 
 // Beams toward @p q (the place in the sensor frame, beam @p index toward it) and beside it
-// returned from beyond it by @p margin_m, or nothing returned within range_max: the scan saw
-// through the place. Out of its view (or beyond @p max_range_m), or a beam there measured nothing
+// returned from beyond it by @p margin_m, or nothing returned within range_max and the place is
+// @p no_return_margin_m nearer than that: the scan saw through the place. Out of its view (or beyond @p max_range_m), or a beam there measured nothing
 // usable: it did not.
 template <typename Record>
 bool sees_through(const Record& r, const Eigen::Vector2d& q, double index, double max_range_m,
-                  double margin_m, std::uint16_t no_return, std::uint16_t unusable) {
+                  double margin_m, double no_return_margin_m, std::uint16_t no_return,
+                  std::uint16_t unusable) {
   const double d = q.norm();
   if (!(d < max_range_m)) return false;
   if (!(index >= 1.0 && index <= static_cast<double>(r.range_cm.size()) - 2.0)) return false;
@@ -442,7 +444,7 @@ bool sees_through(const Record& r, const Eigen::Vector2d& q, double index, doubl
   for (std::size_t j = i - 1; j <= i + 1; ++j) {
     const std::uint16_t c = r.range_cm[j];
     if (c == unusable) return false;
-    if (c == no_return ? !(d < static_cast<double>(r.range_max_m))
+    if (c == no_return ? !(d + no_return_margin_m < static_cast<double>(r.range_max_m))
                        : static_cast<double>(c) * 0.01 < d + margin_m) {
       return false;
     }
@@ -470,12 +472,16 @@ bool sees_through(const Record& r, const Eigen::Vector2d& q, double index, doubl
 
 // Scan @p k saw through @p p (sees_through() above), or its beam toward @p p returned within
 // free_margin_m of it (a hit), or neither.
-OfflineCleaner::Look OfflineCleaner::look(std::size_t k, const Eigen::Vector2d& p) const {
+OfflineCleaner::Look OfflineCleaner::look(std::size_t k, const Eigen::Vector2d& p,
+                                          bool alone) const {
   const ScanRecord& r = scans_[k];
   if (!r.pose || !(r.angle_increment_rad > 0.0)) return Look::kNeither;
   Eigen::Vector2d q;
   const double index = beam_toward(r, p, q);
-  if (sees_through(r, q, index, config_.max_range_m, config_.free_margin_m, kNoReturn, kUnusable)) {
+  // A dark surface near the range limit returns now and then: on its own, a place within
+  // free_margin_m of range_max is not seen through by a beam that returned nothing.
+  if (sees_through(r, q, index, config_.max_range_m, config_.free_margin_m,
+                   alone ? config_.free_margin_m : 0.0, kNoReturn, kUnusable)) {
     return Look::kThrough;
   }
   if (!(index >= 0.0 && index < static_cast<double>(r.range_cm.size()))) return Look::kNeither;
@@ -487,7 +493,9 @@ OfflineCleaner::Look OfflineCleaner::look(std::size_t k, const Eigen::Vector2d& 
 
 // Walks the scans from through_gap_s to through_horizon_s away from scan @p k, later (@p step 1)
 // or earlier (-1), and says whether through_min_scans of them saw through @p p before one hit it
-// (a return within free_margin_m of it on the beam toward it).
+// (a return within free_margin_m of it on the beam toward it). With exact poses, whether
+// through_min_scans in a row did, with no hit among them: someone who came and stood for a
+// while, or stood a while before leaving, is seen in the scans between.
 bool OfflineCleaner::seen_through(std::size_t k, const Eigen::Vector2d& p, int step) const {
   const double t0 = scans_[k].stamp_s;
   return through_before_hit(p, static_cast<std::ptrdiff_t>(k) + step, step,
@@ -495,7 +503,7 @@ bool OfflineCleaner::seen_through(std::size_t k, const Eigen::Vector2d& p, int s
                               const double dt = std::abs(t - t0);
                               if (dt > config_.through_horizon_s) return 1;
                               return dt < config_.through_gap_s ? -1 : 0;
-                            });
+                            }, true);
 }
 
 // Beam @p b of scan @p k returned the same range (kAttached_m) in the scans before and after while

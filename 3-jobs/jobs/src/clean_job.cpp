@@ -16,6 +16,15 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
+CleanConfig clean_config(const CleanJobOptions& options) {
+  CleanConfig c = options.clean;
+  c.poses_exact = options.filter.static_sensor;
+  if (c.through_min_scans == kThroughScansBySensor) {
+    c.through_min_scans = options.filter.static_sensor ? kStaticSensorThroughScans : 0;
+  }
+  return c;
+}
+
 CleanJobStats run_clean_job(const CleanJobOptions& options, const Progress& progress,
                             const std::atomic<bool>* cancel, const Notice& notice) {
   const FilterJobOptions& o = options.filter;
@@ -27,8 +36,9 @@ CleanJobStats run_clean_job(const CleanJobOptions& options, const Progress& prog
                    "CARMEN log as a bag with dispel filter first");
   }
   const DynamicFilterConfig config = filter_config(o);
-  OfflineCleaner cleaner = as_job([&] { return OfflineCleaner(options.clean); });
   CleanJobStats stats;
+  stats.config = clean_config(options);
+  OfflineCleaner cleaner = as_job([&] { return OfflineCleaner(stats.config); });
   const std::unique_ptr<io::RecordingReader> in = open_recording(o.input);
   stats.input_format = in->format_name();
   const io::Topics& topics = in->topics();

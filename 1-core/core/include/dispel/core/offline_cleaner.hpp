@@ -60,6 +60,13 @@ struct CleanConfig {
   int through_min_scans = 0;
   double through_gap_s = 1.0;
   double through_horizon_s = 20.0;
+  /// The poses are exact (a sensor that does not move: `--static-sensor`). Then the rule above
+  /// looks past scans that hit the place: N scans in a row anywhere within the horizon that saw
+  /// through it, with no hit among them, are enough (what is there came and stood a while, or
+  /// stood a while and left). On a moving robot's poses a few centimetres of error grow over
+  /// seconds, and a wall looked at long enough is seen through at last: there the first hit ends
+  /// the look (on the real negative_2, looking past hits removed 24-30 % of the beams).
+  bool poses_exact = false;
   /// Seeing through a place: the beam toward it and both beside it returned from at least this
   /// far (m) beyond it (range noise, a wall seen at a slant), or nothing returned.
   double free_margin_m = 0.3;
@@ -188,15 +195,18 @@ class OfflineCleaner {
   static Pose2 beam_pose(const ScanRecord& record, std::size_t b);
   // What scan k's beam toward a place in the fixed frame says of it.
   enum class Look : std::uint8_t { kThrough, kHit, kNeither };
-  Look look(std::size_t k, const Eigen::Vector2d& p) const;
+  Look look(std::size_t k, const Eigen::Vector2d& p, bool alone = false) const;
   static double beam_toward(const ScanRecord& r, const Eigen::Vector2d& p, Eigen::Vector2d& q);
   bool attached(std::size_t k, std::size_t b) const;
   // Walks the scans from @p first by @p step; @p window(stamp) says whether a scan is skipped
   // (-1), looked at (0) or ends the walk (1). True when @p needed of them saw through @p p before
-  // one hit it.
+  // one hit it. @p alone: the seen-through rule on its own (not where a track moved): a beam that
+  // returned nothing sees through only places free_margin_m nearer than its range_max, and with
+  // CleanConfig::poses_exact @p needed in a row with no hit among them are enough (a hit starts
+  // the count again).
   template <typename Window>
   bool through_before_hit(const Eigen::Vector2d& p, std::ptrdiff_t first, int step, int needed,
-                          Window window) const;
+                          Window window, bool alone = false) const;
   // Whether the scans from through_gap_s after @p from_s on saw through @p p before one hit it.
   bool left_after(const Eigen::Vector2d& p, double from_s) const;
   bool seen_through(std::size_t k, const Eigen::Vector2d& p, int step) const;

@@ -17,12 +17,30 @@
 
 namespace dispel::jobs {
 
+/// CleanConfig::through_min_scans chosen by the sensor: kStaticSensorThroughScans with a sensor
+/// that does not move (FilterJobOptions::static_sensor), else 0 (off). A static sensor's pose is
+/// exact, so a place its beams passed through was free; on a moving robot a few centimetres of
+/// pose error make a surface seen along it look seen through (docs/clean.md).
+constexpr int kThroughScansBySensor = -1;
+constexpr int kStaticSensorThroughScans = 2;
+
+/// CleanConfig's defaults, with through_min_scans kThroughScansBySensor.
+inline CleanConfig clean_defaults_by_sensor() {
+  CleanConfig c;
+  c.through_min_scans = kThroughScansBySensor;
+  return c;
+}
+
 struct CleanJobOptions {
   /// The recording, the output, the configuration, the topics and the sensor as for `dispel
   /// filter` (a CARMEN log is not read: convert it with `dispel filter` first).
   FilterJobOptions filter;
-  CleanConfig clean;
+  CleanConfig clean = clean_defaults_by_sensor();
 };
+
+/// @p options.clean with through_min_scans chosen by the sensor when it is kThroughScansBySensor,
+/// and poses_exact with a static sensor.
+CleanConfig clean_config(const CleanJobOptions& options);
 
 struct CleanJobStats {
   std::string input_format;
@@ -31,6 +49,7 @@ struct CleanJobStats {
   std::map<std::string, std::int64_t> left_out;
   std::int64_t scans = 0;
   FilterCounters online;  ///< The online filter's counters (its first pass).
+  CleanConfig config;  ///< What the cleaner ran with (clean_config()).
   CleanCounts counts;
   std::vector<CleanedObject> objects;
   double first_pass_s = 0.0, second_pass_s = 0.0;  ///< Wall time of each pass.

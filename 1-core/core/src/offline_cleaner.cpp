@@ -431,8 +431,8 @@ namespace {
 
 // Beams toward @p q (the place in the sensor frame, beam @p index toward it) and beside it
 // returned from beyond it by @p margin_m, or nothing returned within range_max and the place is
-// @p no_return_margin_m nearer than that: the scan saw through the place. Out of its view (or beyond @p max_range_m), or a beam there measured nothing
-// usable: it did not.
+// @p no_return_margin_m nearer than that: the scan saw through the place. Out of its view (or
+// beyond @p max_range_m), or a beam there measured nothing usable: it did not.
 template <typename Record>
 bool sees_through(const Record& r, const Eigen::Vector2d& q, double index, double max_range_m,
                   double margin_m, double no_return_margin_m, std::uint16_t no_return,

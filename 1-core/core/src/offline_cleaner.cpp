@@ -498,12 +498,14 @@ OfflineCleaner::Look OfflineCleaner::look(std::size_t k, const Eigen::Vector2d& 
 // while, or stood a while before leaving, is seen in the scans between.
 bool OfflineCleaner::seen_through(std::size_t k, const Eigen::Vector2d& p, int step) const {
   const double t0 = scans_[k].stamp_s;
-  return through_before_hit(p, static_cast<std::ptrdiff_t>(k) + step, step,
-                            config_.through_min_scans, [&](double t) {
-                              const double dt = std::abs(t - t0);
-                              if (dt > config_.through_horizon_s) return 1;
-                              return dt < config_.through_gap_s ? -1 : 0;
-                            }, true);
+  return through_before_hit(
+      p, static_cast<std::ptrdiff_t>(k) + step, step, config_.through_min_scans,
+      [&](double t) {
+        const double dt = std::abs(t - t0);
+        if (dt > config_.through_horizon_s) return 1;
+        return dt < config_.through_gap_s ? -1 : 0;
+      },
+      true);
 }
 
 // Beam @p b of scan @p k returned the same range (kAttached_m) in the scans before and after while

@@ -49,7 +49,7 @@ struct CleanJobStats {
   std::map<std::string, std::int64_t> left_out;
   std::int64_t scans = 0;
   FilterCounters online;  ///< The online filter's counters (its first pass).
-  CleanConfig config;  ///< What the cleaner ran with (clean_config()).
+  CleanConfig config;     ///< What the cleaner ran with (clean_config()).
   CleanCounts counts;
   std::vector<CleanedObject> objects;
   double first_pass_s = 0.0, second_pass_s = 0.0;  ///< Wall time of each pass.

@@ -600,15 +600,19 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
       left_[o] = tally[o].second > 0 && 2 * tally[o].second >= tally[o].first ? 1 : 0;
     }
   }
-  votes_.assign(static_cast<std::size_t>(groups), {0, 0});
+  votes_.assign(static_cast<std::size_t>(groups), Vote{});
   if (config_.through_min_scans > 0 && record.pose) {
     for (std::size_t b = 0; b < n; ++b) {
+      if (group_[b] >= 0) ++votes_[static_cast<std::size_t>(group_[b])].beams;
+    }
+    for (std::size_t b = 0; b < n; ++b) {
       if (group_[b] < 0) continue;
-      auto& [beams, through] = votes_[static_cast<std::size_t>(group_[b])];
-      ++beams;
+      Vote& vote = votes_[static_cast<std::size_t>(group_[b])];
+      if (vote.settled()) continue;
+      ++vote.asked;
       const Eigen::Vector2d& p = point(b);
       if (!attached(index, b) && (seen_through(index, p, 1) || seen_through(index, p, -1))) {
-        ++through;
+        ++vote.through;
       }
     }
   }
@@ -638,10 +642,8 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
         moving && record.stamp_s <= t->object.last_dynamic_s &&
         (online == BeamLabel::kDynamic || left_[record.object[b]] == 1) &&
         near_where_it_moved(*t, record.stamp_s, record.position_of[record.object[b]]);
-    const bool vacated = group_[b] >= 0 && !moved_later && [&] {
-      const auto& [beams, through] = votes_[static_cast<std::size_t>(group_[b])];
-      return through > 0 && 2 * through >= beams;
-    }();
+    const bool vacated =
+        group_[b] >= 0 && !moved_later && votes_[static_cast<std::size_t>(group_[b])].vacated();
     CleanLabel label;
     if (in_walked_leg_[b] != 0) {
       label = CleanLabel::kWalkedLeg;

@@ -249,9 +249,18 @@ class OfflineCleaner {
   std::unordered_map<std::uint64_t, std::uint32_t> track_index_;
   BeamDirections directions_;
   // label(): each beam's thing (object or run of beams in no object; -1: none asked about), and
-  // per thing its beams asked about and those seen through elsewhen.
+  // per thing its beams, those asked about so far, and those seen through elsewhen. The majority
+  // decides (vacated()); once it is settled the thing's other beams are not asked.
+  struct Vote {
+    std::int32_t beams = 0, asked = 0, through = 0;
+    bool vacated() const { return through > 0 && 2 * through >= beams; }
+    bool settled() const {
+      const std::int32_t most = through + beams - asked;
+      return vacated() || most == 0 || 2 * most < beams;
+    }
+  };
   std::vector<std::int32_t> group_;
-  std::vector<std::pair<std::int32_t, std::int32_t>> votes_;
+  std::vector<Vote> votes_;
   std::vector<std::uint8_t> left_;  // label(): per object, see left_after().
   std::vector<std::pair<std::int32_t, std::int32_t>> left_votes_;
   std::vector<Eigen::Vector2d>

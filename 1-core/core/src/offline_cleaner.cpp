@@ -134,7 +134,7 @@ void OfflineCleaner::add(const LaserScan& scan, const FilterResult& result) {
     }
   }
   scans_.push_back(std::move(record));
-  add_runs(scans_.size() - 1);
+  add_runs(scans_.size() - 1, directions_.of(scan));
 }
 
 // Legs at range (CleanConfig::leg_walk_m). A run: neighbouring beams in no object whose ranges
@@ -162,7 +162,7 @@ constexpr double kLegMotionWindow_s = 0.5;
 constexpr double kChainMotion_s = 1.4;
 constexpr double kChainLeftShare = 2.0 / 3.0;
 
-void OfflineCleaner::add_runs(std::size_t k) {
+void OfflineCleaner::add_runs(std::size_t k, const std::vector<Eigen::Vector2d>& unit) {
   runs_begin_.push_back(static_cast<std::uint32_t>(runs_.size()));
   const ScanRecord& r = scans_[k];
   const std::size_t n = r.range_cm.size();
@@ -176,9 +176,7 @@ void OfflineCleaner::add_runs(std::size_t k) {
   };
   const auto range = [&](std::size_t b) { return static_cast<double>(r.range_cm[b]) * 0.01; };
   const auto point = [&](std::size_t b) -> Eigen::Vector2d {
-    const double bearing = r.angle_min_rad + r.angle_increment_rad * static_cast<double>(b);
-    return PoseTransform(beam_pose(r, b))(range(b) *
-                                          Eigen::Vector2d(std::cos(bearing), std::sin(bearing)));
+    return PoseTransform(beam_pose(r, b))(range(b) * unit[b]);
   };
   // The beam beside a run: -1 nothing usable (or the view's end), 0 a return too near, 1 a
   // return farther, 2 no return.
@@ -202,15 +200,20 @@ void OfflineCleaner::add_runs(std::size_t k) {
     }
     const int before = beside(static_cast<std::ptrdiff_t>(b) - 1, nearest);
     const int after = beside(static_cast<std::ptrdiff_t>(e) + 1, nearest);
-    if (before > 0 && after > 0 && (before == 1 || after == 1) && nearest < config_.max_range_m &&
-        (point(e) - point(b)).norm() <= kLegWidth_m) {
+    // A run at most kLegWidth_m wide, its end points worked out once.
+    const bool stands_out =
+        before > 0 && after > 0 && (before == 1 || after == 1) && nearest < config_.max_range_m;
+    const Eigen::Vector2d first = stands_out ? point(b) : Eigen::Vector2d::Zero();
+    const Eigen::Vector2d last = stands_out ? point(e) : Eigen::Vector2d::Zero();
+    if (stands_out && (last - first).norm() <= kLegWidth_m) {
       Run run;
       run.scan = static_cast<std::uint32_t>(k);
       run.first = static_cast<std::uint16_t>(b);
       run.last = static_cast<std::uint16_t>(e);
       run.beams = static_cast<std::uint16_t>(e - b + 1);
-      Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-      for (std::size_t j = b; j <= e; ++j) sum += point(j);
+      Eigen::Vector2d sum = first;
+      for (std::size_t j = b + 1; j < e; ++j) sum += point(j);
+      if (e > b) sum += last;
       run.at = (sum / static_cast<double>(run.beams)).cast<float>();
       // The other leg of the run before it.
       Run* prev = runs_.size() > first_new ? &runs_.back() : nullptr;
@@ -231,8 +234,10 @@ void OfflineCleaner::add_runs(std::size_t k) {
   }
   // Each open chain takes the nearest new run to where it was heading, nearest pairs first.
   const double t = r.stamp_s;
-  std::vector<std::tuple<float, std::uint32_t, std::uint32_t>> pairs;
-  std::vector<std::uint32_t> open;
+  std::vector<std::tuple<float, std::uint32_t, std::uint32_t>>& pairs = link_pairs_;
+  std::vector<std::uint32_t>& open = next_open_chains_;
+  pairs.clear();
+  open.clear();
   for (const std::uint32_t c : open_chains_) {
     const Chain& chain = chains_[c];
     const double dt = t - chain.last_s;
@@ -247,7 +252,8 @@ void OfflineCleaner::add_runs(std::size_t k) {
     }
   }
   std::sort(pairs.begin(), pairs.end());
-  std::vector<char> linked(runs_.size() - first_new, 0);
+  std::vector<char>& linked = linked_;
+  linked.assign(runs_.size() - first_new, 0);
   for (const auto& [d, c, i] : pairs) {
     Chain& chain = chains_[c];
     if (linked[i - first_new] != 0 || chain.last_s == t) continue;
@@ -266,7 +272,7 @@ void OfflineCleaner::add_runs(std::size_t k) {
     open.push_back(static_cast<std::uint32_t>(chains_.size()));
     chains_.push_back(std::move(chain));
   }
-  open_chains_ = std::move(open);
+  open_chains_.swap(open);
 }
 
 void OfflineCleaner::decide_runs() {

@@ -234,7 +234,8 @@ class OfflineCleaner {
     double last_s = 0.0;
   };
   // Pass 1: scan @p k's runs, linked to the open chains.
-  void add_runs(std::size_t k);
+  // @p unit: the scan's beam directions (directions_).
+  void add_runs(std::size_t k, const std::vector<Eigen::Vector2d>& unit);
   // finish(): which runs of which chains are removed.
   void decide_runs();
 
@@ -243,7 +244,12 @@ class OfflineCleaner {
   std::vector<Run> runs_;
   std::vector<std::uint32_t> runs_begin_;  // Per scan: the index of its first run in runs_.
   std::vector<Chain> chains_;
-  std::vector<std::uint32_t> open_chains_;   // Chains a run of the next scan may extend.
+  std::vector<std::uint32_t> open_chains_;  // Chains a run of the next scan may extend.
+  // add_runs()'s working space, kept from scan to scan: candidate (distance, chain, run) links,
+  // the chains left open, whether each new run was linked.
+  std::vector<std::tuple<float, std::uint32_t, std::uint32_t>> link_pairs_;
+  std::vector<std::uint32_t> next_open_chains_;
+  std::vector<char> linked_;
   std::vector<std::uint8_t> in_walked_leg_;  // label(): per beam, in a removed run.
   std::vector<Track> tracks_;
   std::unordered_map<std::uint64_t, std::uint32_t> track_index_;

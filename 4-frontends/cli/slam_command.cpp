@@ -160,6 +160,7 @@ nlohmann::ordered_json summary_json(const slam::ExperimentResult& r,
       v["preservation_rate"] = statistic_json(s.preservation_rate);
       v["rejection_rate"] = statistic_json(s.rejection_rate);
       v["still_removed_rate"] = statistic_json(s.still_removed_rate);
+      v["still_moves_later_removed_rate"] = statistic_json(s.still_moves_later_removed_rate);
     }
     if (s.map_wrongly_occupied_share.count > 0) {
       v["map"] = {{"wrongly_occupied_share", statistic_json(s.map_wrongly_occupied_share)},
@@ -214,6 +215,7 @@ nlohmann::ordered_json runs_json(const slam::ExperimentResult& r) {
     j["preservation_rate"] = number_or_null(run.preservation_rate);
     j["rejection_rate"] = number_or_null(run.rejection_rate);
     j["still_removed_rate"] = number_or_null(run.still_removed_rate);
+    j["still_moves_later_removed_rate"] = number_or_null(run.still_moves_later_removed_rate);
     j["map"] = run.map
                    ? nlohmann::ordered_json{{"oracle_occupied_cells", run.map->reference_occupied},
                                             {"occupied_cells", run.map->evaluated_occupied},
@@ -240,8 +242,9 @@ void write_outputs(const std::string& dir, const slam::ExperimentResult& r,
                  "seed,variant,rmse_position_m,rmse_x_m,rmse_y_m,rmse_yaw_rad,"
                  "max_position_error_m,max_yaw_error_rad,final_position_error_m,diverged,"
                  "full_range_rmse_x_m,full_range_rmse_y_m,full_range_rmse_yaw_rad,"
-                 "preservation_rate,rejection_rate,still_removed_rate,oracle_occupied_cells,"
-                 "wrongly_occupied_cells,lost_cells\n");
+                 "preservation_rate,rejection_rate,still_removed_rate,"
+                 "still_moves_later_removed_rate,oracle_occupied_cells,wrongly_occupied_cells,"
+                 "lost_cells\n");
     for (const slam::ExperimentRun& run : r.runs) {
       const eval::TrajectoryErrors& e = run.against_truth;
       std::fprintf(f, "%llu,%s,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,",
@@ -262,6 +265,7 @@ void write_outputs(const std::string& dir, const slam::ExperimentResult& r,
       rate(run.preservation_rate, ",");
       rate(run.rejection_rate, ",");
       rate(run.still_removed_rate, ",");
+      rate(run.still_moves_later_removed_rate, ",");
       if (run.map) {
         std::fprintf(f, "%lld,%lld,%lld\n", static_cast<long long>(run.map->reference_occupied),
                      static_cast<long long>(run.map->wrongly_occupied),
@@ -352,6 +356,9 @@ void print_tables(const slam::ExperimentResult& r, const std::vector<slam::Varia
     }
     if (s.still_removed_rate.count > 0) {
       std::printf(" and %.4f of those of people standing still", s.still_removed_rate.mean);
+      if (s.still_moves_later_removed_rate.count > 0) {
+        std::printf(" (%.4f of those seen moving later)", s.still_moves_later_removed_rate.mean);
+      }
     }
   }
   std::printf("\n");

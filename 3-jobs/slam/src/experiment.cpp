@@ -272,6 +272,7 @@ ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProg
       run.preservation_rate = r ? r->preservation_rate() : kNone;
       run.rejection_rate = r ? r->rejection_rate() : kNone;
       run.still_removed_rate = r ? r->still_removed_rate() : kNone;
+      run.still_moves_later_removed_rate = r ? r->still_moves_later_removed_rate() : kNone;
     };
     const auto scan_topic = [](Variant v) {
       if (v == Variant::kCleaned) return "/scan_clean";
@@ -356,7 +357,8 @@ ExperimentResult run_experiment(const ExperimentOptions& o, const ExperimentProg
 std::vector<VariantSummary> summarise(const ExperimentResult& result) {
   std::vector<VariantSummary> out;
   for (const Variant v : kTableOrder) {
-    std::vector<double> p, x, y, yaw, worst, fx, fy, fyaw, pres, rej, still, wrong, lost;
+    std::vector<double> p, x, y, yaw, worst, fx, fy, fyaw, pres, rej, still, still_later, wrong,
+        lost;
     VariantSummary s;
     s.variant = v;
     for (const ExperimentRun& r : result.runs) {
@@ -376,6 +378,9 @@ std::vector<VariantSummary> summarise(const ExperimentResult& result) {
       if (std::isfinite(r.preservation_rate)) pres.push_back(r.preservation_rate);
       if (std::isfinite(r.rejection_rate)) rej.push_back(r.rejection_rate);
       if (std::isfinite(r.still_removed_rate)) still.push_back(r.still_removed_rate);
+      if (std::isfinite(r.still_moves_later_removed_rate)) {
+        still_later.push_back(r.still_moves_later_removed_rate);
+      }
       if (r.map && std::isfinite(r.map->wrongly_occupied_share())) {
         wrong.push_back(r.map->wrongly_occupied_share());
         lost.push_back(r.map->lost_share());
@@ -393,6 +398,7 @@ std::vector<VariantSummary> summarise(const ExperimentResult& result) {
     s.preservation_rate = statistic(pres);
     s.rejection_rate = statistic(rej);
     s.still_removed_rate = statistic(still);
+    s.still_moves_later_removed_rate = statistic(still_later);
     s.map_wrongly_occupied_share = statistic(wrong);
     s.map_lost_share = statistic(lost);
     out.push_back(s);

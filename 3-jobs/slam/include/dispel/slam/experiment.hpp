@@ -96,10 +96,12 @@ struct ExperimentRun {
   std::optional<eval::TrajectoryErrors> against_full_range;
   bool diverged = false;
   /// Filtered and cleaned variants: the filter's rates on this seed (dispel eval), the share of
-  /// the beams on actors standing still that it removed too; NaN otherwise.
+  /// the beams on actors standing still that it removed too, and of those of them on actors the
+  /// scanner sees moving later (what an offline filter can know to remove); NaN otherwise.
   double preservation_rate = 0.0;
   double rejection_rate = 0.0;
   double still_removed_rate = 0.0;
+  double still_moves_later_removed_rate = 0.0;
   /// The cut SLAM runs: this run's occupancy grid against oracle_static's.
   std::optional<eval::MapComparison> map;
   /// The trajectory (t, x, y, yaw; in the world frame of the simulation).
@@ -139,7 +141,8 @@ struct VariantSummary {
   Statistic rmse_position_m, rmse_x_m, rmse_y_m, rmse_yaw_rad, max_position_error_m;
   /// The thesis's protocol: the same figures against full_range (runs without it: zeros).
   Statistic full_range_rmse_x_m, full_range_rmse_y_m, full_range_rmse_yaw_rad;
-  Statistic preservation_rate, rejection_rate, still_removed_rate;  ///< Filtered variants only.
+  /// Filtered variants only.
+  Statistic preservation_rate, rejection_rate, still_removed_rate, still_moves_later_removed_rate;
   /// The cut SLAM runs: shares of oracle_static's grid's occupied cells.
   Statistic map_wrongly_occupied_share, map_lost_share;
 };

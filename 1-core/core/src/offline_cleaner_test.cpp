@@ -9,15 +9,21 @@
 namespace dispel {
 namespace {
 
-// A still scanner facing a wall 5 m away; for the first 20 scans a box stands 2 m in front of it
-// over beams 40-60, then it is gone and the scanner sees the wall there.
-LaserScan scan_at(int k) {
+// Scan @p k of a still scanner at 10 Hz, 101 beams from -0.5 rad, no ranges yet.
+LaserScan still_scan(int k, float range_max_m) {
   LaserScan s;
   s.stamp_s = 100.0 + 0.1 * k;
   s.angle_min_rad = -0.5;
   s.angle_increment_rad = 0.01;
   s.range_min_m = 0.1F;
-  s.range_max_m = 30.0F;
+  s.range_max_m = range_max_m;
+  return s;
+}
+
+// A still scanner facing a wall 5 m away; for the first 20 scans a box stands 2 m in front of it
+// over beams 40-60, then it is gone and the scanner sees the wall there.
+LaserScan scan_at(int k) {
+  LaserScan s = still_scan(k, 30.0F);
   for (int b = 0; b < 101; ++b) {
     const double bearing = s.angle_min_rad + s.angle_increment_rad * b;
     const bool box = k < 20 && b >= 40 && b <= 60;
@@ -89,12 +95,7 @@ TEST(OfflineCleaner, WhatStoodWhereTheScannerSawThroughAtAnotherTimeIsRemovedWhe
 // have passed a surface too dark to return it). Neither place is seen through.
 TEST(OfflineCleaner, AFlickeringPostAndADarkBoardAtTheRangeLimitStay) {
   const auto scan_of = [](int k) {
-    LaserScan s;
-    s.stamp_s = 100.0 + 0.1 * k;
-    s.angle_min_rad = -0.5;
-    s.angle_increment_rad = 0.01;
-    s.range_min_m = 0.1F;
-    s.range_max_m = 5.6F;
+    LaserScan s = still_scan(k, 5.6F);
     const float none = std::numeric_limits<float>::infinity();
     for (int b = 0; b < 101; ++b) {
       float r = none;  // The open room beyond the range limit.

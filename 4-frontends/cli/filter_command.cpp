@@ -170,6 +170,7 @@ nlohmann::ordered_json clean_stats_json(const jobs::CleanJobOptions& o,
                        {"travel_m", x.travel_m},
                        {"dynamic_travel_m", x.dynamic_travel_m},
                        {"moving", x.moving},
+                       {"walking_scans", x.walking_scans},
                        {"beams", x.beams},
                        {"beams_removed", x.beams_removed}});
   }

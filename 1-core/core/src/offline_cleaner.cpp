@@ -99,6 +99,8 @@ void OfflineCleaner::add(const LaserScan& scan, const FilterResult& result) {
                          (track.moving_at.back().second - track.moving_at.front().second).norm()));
       }
       o.travel_m = std::max(o.travel_m, (t.position_m - track.first_position).norm());
+      track.seen.push_back({scan.stamp_s, t.position_m.cast<float>(),
+                            t.object_class == ObjectClass::kDynamic, false});
       record.track_of[static_cast<std::size_t>(t.object_index)] = it->second;
       record.position_of[static_cast<std::size_t>(t.object_index)] = t.position_m.cast<float>();
     }
@@ -344,7 +346,63 @@ void OfflineCleaner::finish() {
   for (Track& t : tracks_) {
     t.object.moving = t.object.dynamic_scans >= config_.moving_min_scans &&
                       t.object.dynamic_travel_m >= config_.moving_min_travel_m;
+    if (t.object.moving) mark_walking(t);
   }
+}
+
+// A track walking: over every kWalkWindow_s of its sightings it went at least kWalkSpeed_mps
+// times the time between, seen at least every kWalkWindow_s, and from one sighting to the next
+// no faster than kWalkMaxSpeed_mps (plus kWalkJump_m): a track that jumped from a post to a
+// passer-by did not walk. A person who walks into view is found moving by the online filter
+// only after some scans (more at range, or when the scanner has not yet seen the place free);
+// before, the track walked there from farther than moved_from_m. A standing person's centroid
+// jumps between one leg and two by about 0.1 m.
+constexpr double kWalkWindow_s = 0.5;
+constexpr double kWalkSpeed_mps = 0.4;
+constexpr double kWalkMaxSpeed_mps = 3.0;
+constexpr double kWalkJump_m = 0.3;
+
+void OfflineCleaner::mark_walking(Track& track) {
+  auto& seen = track.seen;
+  const auto n = static_cast<std::ptrdiff_t>(seen.size());
+  // From each dynamic sighting, outward in time (step -1: back; 1: on) while it kept walking.
+  for (const int step : {-1, 1}) {
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+      if (!seen[static_cast<std::size_t>(i)].dynamic) continue;
+      const std::ptrdiff_t next = i + step;
+      if (next >= 0 && next < n && seen[static_cast<std::size_t>(next)].dynamic) continue;
+      // i is the edge of a dynamic stretch: walk out of it.
+      for (std::ptrdiff_t m = next; m >= 0 && m < n; m += step) {
+        auto& s = seen[static_cast<std::size_t>(m)];
+        if (s.dynamic) break;
+        const auto& before = seen[static_cast<std::size_t>(m - step)];
+        const double gap_s = std::abs(s.stamp_s - before.stamp_s);
+        if (gap_s > kWalkWindow_s || static_cast<double>((s.position - before.position).norm()) >
+                                         kWalkMaxSpeed_mps * gap_s + kWalkJump_m) {
+          break;
+        }
+        // The sighting at least kWalkWindow_s nearer the stretch.
+        std::ptrdiff_t a = m - step;
+        while (a >= 0 && a < n &&
+               std::abs(seen[static_cast<std::size_t>(a)].stamp_s - s.stamp_s) < kWalkWindow_s) {
+          a -= step;
+        }
+        if (a < 0 || a >= n) break;
+        const auto& at = seen[static_cast<std::size_t>(a)];
+        const double dt = std::abs(at.stamp_s - s.stamp_s);
+        if (static_cast<double>((at.position - s.position).norm()) < kWalkSpeed_mps * dt) break;
+        s.walking = true;
+        ++track.object.walking_scans;
+      }
+    }
+  }
+}
+
+bool OfflineCleaner::walking(const Track& track, double stamp_s) {
+  const auto it =
+      std::lower_bound(track.seen.begin(), track.seen.end(), stamp_s,
+                       [](const Track::Sighting& s, double t) { return s.stamp_s < t; });
+  return it != track.seen.end() && it->stamp_s == stamp_s && it->walking;
 }
 
 std::vector<std::pair<double, Eigen::Vector2f>>::const_iterator OfflineCleaner::moving_from(
@@ -576,8 +634,10 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
       group_[b] = groups++;
     }
   }
-  // Per object of a moving track not found moving in this scan: whether its place was left
-  // (kLeftScans) after the track moved on, by the majority of its beams (1), or not (0).
+  // Per object of a moving track not found moving in this scan, until it last moved (what
+  // stopped and stayed to the end is there from then on) and near where it moved, or while it
+  // walked into or out of a stretch in which it moved: whether its place was left (kLeftScans)
+  // after the track moved on, by the majority of its beams (1), or not (0).
   left_.assign(static_cast<std::size_t>(objects), 0);
   if (record.pose && objects > 0) {
     std::vector<std::pair<std::int32_t, std::int32_t>>& tally = left_votes_;
@@ -593,14 +653,15 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
         continue;
       }
       const Track& t = tracks_[record.track_of[o]];
-      // Asked only where it matters: label() removes the object only near where it moved.
-      if (!t.object.moving || record.stamp_s > t.object.last_dynamic_s ||
-          !near_where_it_moved(t, record.stamp_s, record.position_of[o])) {
-        continue;
-      }
+      // Asked only where it matters: label() removes the object only near where it moved, or
+      // where it walked into or out of it.
+      if (!t.object.moving) continue;
+      const bool near = record.stamp_s <= t.object.last_dynamic_s &&
+                        near_where_it_moved(t, record.stamp_s, record.position_of[o]);
+      if (!near && !walking(t, record.stamp_s)) continue;
       auto& [beams, left] = tally[o];
       ++beams;
-      if (left_after(point(b), next_moving_s(t, record.stamp_s))) ++left;
+      if (left_after(point(b), near ? next_moving_s(t, record.stamp_s) : record.stamp_s)) ++left;
     }
     for (std::size_t o = 0; o < left_.size(); ++o) {
       left_[o] = tally[o].second > 0 && 2 * tally[o].second >= tally[o].first ? 1 : 0;
@@ -642,12 +703,8 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
     }
     Track* t = track != kNone32 ? &tracks_[track] : nullptr;
     const bool moving = t != nullptr && t->object.moving;
-    // Until it last moved (what stopped and stayed to the end is there from then on), and near
-    // where it moved.
-    const bool moved_later =
-        moving && record.stamp_s <= t->object.last_dynamic_s &&
-        (online == BeamLabel::kDynamic || left_[record.object[b]] == 1) &&
-        near_where_it_moved(*t, record.stamp_s, record.position_of[record.object[b]]);
+    // Its object's place was left where its track moved at another time (left_).
+    const bool moved_later = t != nullptr && left_[record.object[b]] == 1;
     const bool vacated =
         group_[b] >= 0 && !moved_later && votes_[static_cast<std::size_t>(group_[b])].vacated();
     CleanLabel label;

@@ -117,20 +117,26 @@ TEST(OfflineCleaner, AFlickeringPostAndADarkBoardAtTheRangeLimitStay) {
   EXPECT_GT(cleaner.counts().valid_beams, 200 * 7 * 6 / 7 + 200 * 11 / 2 - 100);
 }
 
-// The box of scan_at() as one object tracked as @p id at @p position, labelled dynamic or static.
-FilterResult box_tracked(const LaserScan& scan, std::uint64_t id, const Eigen::Vector2d& position,
-                         bool dynamic) {
+// Beams @p first to @p last of @p scan as one object tracked as @p id at @p position, labelled
+// dynamic or static.
+FilterResult tracked(const LaserScan& scan, int first, int last, std::uint64_t id,
+                     const Eigen::Vector2d& position, bool dynamic) {
   FilterResult r = all_static(scan);
   Segmentation& seg = r.segmentation;
   seg.beam_labels.assign(scan.size(), kLabelNoise);
-  ScanObject box;
-  box.first_beam = 40;
-  box.last_beam = 60;
-  box.point_count = 21;
-  box.first_point_m = {2.0, -0.2};
-  box.last_point_m = {2.0, 0.2};
-  seg.objects.push_back(box);
-  for (int b = 40; b <= 60; ++b) {
+  ScanObject thing;
+  thing.first_beam = first;
+  thing.last_beam = last;
+  thing.point_count = last - first + 1;
+  const auto at = [&](int b) {
+    const double bearing = scan.angle_min_rad + scan.angle_increment_rad * b;
+    return static_cast<double>(scan.ranges_m[static_cast<std::size_t>(b)]) *
+           Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+  };
+  thing.first_point_m = at(first);
+  thing.last_point_m = at(last);
+  seg.objects.push_back(thing);
+  for (int b = first; b <= last; ++b) {
     seg.beam_labels[static_cast<std::size_t>(b)] = 0;
     r.labels[static_cast<std::size_t>(b)] = dynamic ? BeamLabel::kDynamic : BeamLabel::kStatic;
   }
@@ -141,6 +147,12 @@ FilterResult box_tracked(const LaserScan& scan, std::uint64_t id, const Eigen::V
   t.object_index = 0;
   r.tracks.push_back(t);
   return r;
+}
+
+// The box of scan_at() as one object tracked as @p id at @p position, labelled dynamic or static.
+FilterResult box_tracked(const LaserScan& scan, std::uint64_t id, const Eigen::Vector2d& position,
+                         bool dynamic) {
+  return tracked(scan, 40, 60, id, position, dynamic);
 }
 
 // negative_2 (a real robot, laser-only, no people): a track dynamic for three scans in which it
@@ -173,6 +185,113 @@ TEST(OfflineCleaner, ATrackMovedOnlyIfItTravelledWhileFoundDynamic) {
     LaserScan first = scan_at(0);
     cleaner.label(0, first, labels);
     EXPECT_EQ(labels[50], moved ? CleanLabel::kDynamic : CleanLabel::kRestored);
+  }
+}
+
+// A still scanner (10 Hz, 201 beams over 2 rad) before a wall 5 m away. A person (0.4 m wide)
+// walks across it 2 m away at 1 m/s, from y = -1.8 to 3 (scans 0-48). The online filter
+// finds the person moving only from scan 30 (y = 1.2), as it does for someone walking in at
+// range, and to the end: it moved 1.8 m while dynamic. In scans 20-29 the person is within
+// moved_from_m (1 m) of where the track was found moving; in scans 0-19 the track walked there from
+// farther. In the second case a post at (3.5, -5) is on that track in scans 0-19, and the track
+// then jumps to the passer-by (on another track before): the post did not walk, and stays.
+struct Walkin {
+  static constexpr int kScans = 49;
+  static constexpr int kFoundMoving = 30;
+  static constexpr int kBeams = 201;
+  static double person_y(int k) { return -1.8 + 0.1 * k; }
+  static Eigen::Vector2d unit(int b) {
+    const double bearing = -1.0 + 0.01 * b;
+    return {std::cos(bearing), std::sin(bearing)};
+  }
+  // Where beam @p b meets the post (0.1 m radius at (3.5, -5)), or infinity.
+  static double post_range(int b) {
+    const Eigen::Vector2d post(3.5, -5.0);
+    const double along = post.dot(unit(b));
+    return (along * unit(b) - post).norm() <= 0.1 ? along : HUGE_VAL;
+  }
+  static bool on_person(int k, int b) {
+    const Eigen::Vector2d u = unit(b);
+    return std::abs(2.0 / u.x() * u.y() - person_y(k)) <= 0.2;
+  }
+  static LaserScan scan(int k) {
+    LaserScan s = still_scan(k, 30.0F);
+    s.angle_min_rad = -1.0;
+    for (int b = 0; b < kBeams; ++b) {
+      const double to_wall = 5.0 / unit(b).x();
+      const double r = on_person(k, b) ? 2.0 / unit(b).x() : std::min(to_wall, post_range(b));
+      s.ranges_m.push_back(static_cast<float>(r));
+    }
+    return s;
+  }
+  // The first and last beam of what @p hit says.
+  template <typename Hit>
+  static std::pair<int, int> beams(Hit hit) {
+    std::pair<int, int> span{-1, -1};
+    for (int b = 0; b < kBeams; ++b) {
+      if (!hit(b)) continue;
+      if (span.first < 0) span.first = b;
+      span.second = b;
+    }
+    return span;
+  }
+};
+
+TEST(OfflineCleaner, APersonWhoseTrackWalkedInFromFarIsRemovedFromTheFirstScanAndAPostStays) {
+  const auto [post_first, post_last] =
+      Walkin::beams([](int b) { return std::isfinite(Walkin::post_range(b)); });
+  ASSERT_GE(post_first, 0);
+  for (const bool takeover : {false, true}) {
+    SCOPED_TRACE(takeover ? "a post's track takes the passer-by over" : "one track walks in");
+    OfflineCleaner cleaner{CleanConfig{}};
+    std::vector<LaserScan> scans;
+    for (int k = 0; k < Walkin::kScans; ++k) {
+      scans.push_back(Walkin::scan(k));
+      const LaserScan& s = scans.back();
+      const auto [first, last] = Walkin::beams([k](int b) { return Walkin::on_person(k, b); });
+      ASSERT_GE(first, 0);
+      ASSERT_LT(post_last, first);
+      // The person's track: 7 throughout, or 7 (the post's until then) from scan 20 on.
+      const std::uint64_t person_track = takeover && k < 20 ? 11 : 7;
+      FilterResult r = tracked(s, first, last, person_track, {2.0, Walkin::person_y(k)},
+                               k >= Walkin::kFoundMoving);
+      if (takeover) {  // The post as a second object.
+        const FilterResult post =
+            tracked(s, post_first, post_last, k < 20 ? 7 : 12, {3.5, -5.0}, false);
+        for (int b = post_first; b <= post_last; ++b) {
+          r.segmentation.beam_labels[static_cast<std::size_t>(b)] = 1;
+        }
+        r.segmentation.objects.push_back(post.segmentation.objects.front());
+        TrackedObject t = post.tracks.front();
+        t.object_index = 1;
+        r.tracks.push_back(t);
+      }
+      cleaner.add(s, r);
+    }
+    cleaner.finish();
+    std::vector<CleanLabel> labels;
+    int person_kept = 0, person_kept_far = 0, wall_removed = 0, post_removed = 0;
+    for (int k = 0; k < Walkin::kScans; ++k) {
+      cleaner.label(static_cast<std::size_t>(k), scans[static_cast<std::size_t>(k)], labels);
+      for (int b = 0; b < Walkin::kBeams; ++b) {
+        const bool gone = removed(labels[static_cast<std::size_t>(b)]);
+        if (Walkin::on_person(k, b)) {
+          person_kept += gone ? 0 : 1;
+          person_kept_far += !gone && k < 20 ? 1 : 0;
+        } else if (b >= post_first && b <= post_last) {
+          post_removed += gone ? 1 : 0;
+        } else {
+          wall_removed += gone ? 1 : 0;
+        }
+      }
+    }
+    EXPECT_EQ(wall_removed, 0);
+    EXPECT_EQ(post_removed, 0);
+    if (takeover) {
+      EXPECT_GT(person_kept_far, 0);  // On another track before scan 20, one that never moved.
+    } else {
+      EXPECT_EQ(person_kept, 0);  // From the first scan, 3 m from where it was found moving.
+    }
   }
 }
 

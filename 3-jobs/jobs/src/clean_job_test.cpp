@@ -124,16 +124,23 @@ TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
     }
   }
   EXPECT_EQ(removed_beams, stats.counts.removed());
-  // The objects it reports: those that moved, with when.
-  int moving = 0;
+  // The objects it reports: those that moved, with when, and how long they walked before the
+  // online filter found them moving (or after).
+  int moving = 0, walked_in = 0;
   for (const CleanedObject& o : stats.objects) {
-    if (!o.moving) continue;
+    if (!o.moving) {
+      EXPECT_EQ(o.walking_scans, 0);
+      continue;
+    }
     ++moving;
+    walked_in += o.walking_scans > 0 ? 1 : 0;
     EXPECT_GE(o.dynamic_scans, c.clean.moving_min_scans);
     EXPECT_LE(o.first_seen_s, o.first_dynamic_s);
     EXPECT_LE(o.first_dynamic_s, o.last_dynamic_s);
+    EXPECT_LE(o.walking_scans + o.dynamic_scans, o.scans);
   }
   EXPECT_GE(moving, 5);
+  EXPECT_GE(walked_in, 1);
 }
 
 // The thesis's hall (config/scenarios/thesis_hall.yaml, seed 2: its mapping test): people walk

@@ -128,6 +128,9 @@ struct CleanedObject {
   /// for static, as a wall piece does on a moving robot's drifting poses).
   double dynamic_travel_m = 0.0;
   bool moving = false;  ///< Counted as moving (CleanConfig): every beam of it removed.
+  /// Of a track that moved, the scans in which the online filter did not find it moving but it
+  /// was walking into or out of a stretch in which it did (at least 0.4 m/s over every 0.5 s).
+  std::int32_t walking_scans = 0;
   std::int64_t beams = 0, beams_removed = 0;
 };
 
@@ -186,6 +189,15 @@ class OfflineCleaner {
     Eigen::Vector2d first_position = Eigen::Vector2d::Zero();
     // Where it was when the online filter found it moving, in time order.
     std::vector<std::pair<double, Eigen::Vector2f>> moving_at;
+    // Every sighting, in time order; finish() marks those in which it was walking into or out of
+    // a stretch the online filter found it moving (walking_into()).
+    struct Sighting {
+      double stamp_s = 0.0;
+      Eigen::Vector2f position = Eigen::Vector2f::Zero();
+      bool dynamic = false;
+      bool walking = false;
+    };
+    std::vector<Sighting> seen;
   };
   static constexpr std::uint16_t kNone = 0xFFFF;
   static constexpr std::uint16_t kNoReturn = 0xFFFF, kUnusable = 0xFFFE;  // In range_cm.
@@ -216,6 +228,12 @@ class OfflineCleaner {
   static double next_moving_s(const Track& track, double stamp_s);
   bool near_where_it_moved(const Track& track, double stamp_s,
                            const Eigen::Vector2f& position) const;
+  // finish(): marks @p track's sightings next to a dynamic one from which it walked on without
+  // a pause (walking()).
+  static void mark_walking(Track& track);
+  // Whether @p track was walking into or out of a stretch in which it was found moving at
+  // @p stamp_s (mark_walking()).
+  static bool walking(const Track& track, double stamp_s);
 
   // A run of beams in no object (too few for N_min), narrow, in front of what is beside it: a leg
   // at range (with the other leg beside it, merged), a small static thing, or speckle.

@@ -9,9 +9,13 @@
 #include <sensor_msgs/LaserScan.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace dispel::test {
@@ -59,6 +63,35 @@ WallsAndWalkers walls_and_walkers(const std::vector<sensor_msgs::LaserScan>& sca
         out.walkers_removed += removed(k, i) ? 1 : 0;
       }
     }
+  }
+  return out;
+}
+
+// What tools/static_recording_eval.py (run by /usr/bin/python3, which has python3-rosbag) says
+// of @p labels_topic in @p bag, in its printed precision: the rates to 4 decimals and the beam
+// counts. Nothing when it fails or prints something else.
+struct PrintedWallsAndWalkers {
+  double walls_kept = 0.0, walkers_removed = 0.0;
+  long wall_beams = 0, walker_beams = 0;
+  std::string printed;
+};
+inline std::optional<PrintedWallsAndWalkers> static_recording_eval_py(
+    const std::string& source_dir, const std::string& bag, const std::string& labels_topic) {
+  const std::string command = "/usr/bin/python3 " + source_dir +
+                              "/tools/static_recording_eval.py '" + bag + "' " + labels_topic +
+                              " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return std::nullopt;
+  PrintedWallsAndWalkers out;
+  std::array<char, 512> line{};
+  while (std::fgets(line.data(), static_cast<int>(line.size()), pipe) != nullptr) {
+    out.printed += line.data();
+  }
+  if (pclose(pipe) != 0) return std::nullopt;
+  if (std::sscanf(out.printed.c_str(),
+                  "walls kept %lf (%ld beams), walkers removed %lf (%ld beams)", &out.walls_kept,
+                  &out.wall_beams, &out.walkers_removed, &out.walker_beams) != 4) {
+    return std::nullopt;
   }
   return out;
 }

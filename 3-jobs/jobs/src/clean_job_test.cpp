@@ -213,12 +213,25 @@ TEST(CleanJob, AStillScannersWalkersGoAndItsWallsStay) {
     const auto& labels = out.scans.at("/scan_clean_labels");
     EXPECT_EQ(cleaned.size(), scans.size());
     EXPECT_EQ(labels.size(), scans.size());
+    const test::WallsAndWalkers rates =
+        test::walls_and_walkers(scans, [&](std::size_t k, std::size_t i) {
+          const bool gone = removed(static_cast<CleanLabel>(labels.at(k).intensities.at(i)));
+          EXPECT_EQ(gone, std::isnan(cleaned.at(k).ranges.at(i)));
+          return gone;
+        });
+    // The rule is written twice, here and in tools/static_recording_eval.py (the figure in the
+    // docs): they must agree.
+    const auto py =
+        test::static_recording_eval_py(source_path(""), c.filter.output, "/scan_clean_labels");
+    EXPECT_TRUE(py.has_value()) << "tools/static_recording_eval.py failed";
+    if (py) {
+      EXPECT_EQ(py->wall_beams, rates.wall_beams) << py->printed;
+      EXPECT_EQ(py->walker_beams, rates.walker_beams) << py->printed;
+      EXPECT_NEAR(py->walls_kept, rates.walls_kept_rate(), 0.5e-4) << py->printed;
+      EXPECT_NEAR(py->walkers_removed, rates.walkers_removed_rate(), 0.5e-4) << py->printed;
+    }
     std::remove(c.filter.output.c_str());
-    return test::walls_and_walkers(scans, [&](std::size_t k, std::size_t i) {
-      const bool gone = removed(static_cast<CleanLabel>(labels.at(k).intensities.at(i)));
-      EXPECT_EQ(gone, std::isnan(cleaned.at(k).ranges.at(i)));
-      return gone;
-    });
+    return rates;
   };
   CleanJobStats by_sensor, off;
   const test::WallsAndWalkers d = clean(kThroughScansBySensor, by_sensor);

@@ -190,6 +190,32 @@ void OfflineCleaner::add_runs(std::size_t k, const std::vector<Eigen::Vector2d>&
     return static_cast<double>(c) * 0.01 >= nearest + kLegStandOut_m ? 1 : 0;
   };
   const std::size_t first_new = runs_.size();
+  // Beams b to e, from @p first to @p last: a run, or the other leg of the run before it.
+  const auto add_run = [&](std::size_t b, std::size_t e, const Eigen::Vector2d& first,
+                           const Eigen::Vector2d& last) {
+    Run run;
+    run.scan = static_cast<std::uint32_t>(k);
+    run.first = static_cast<std::uint16_t>(b);
+    run.last = static_cast<std::uint16_t>(e);
+    run.beams = static_cast<std::uint16_t>(e - b + 1);
+    Eigen::Vector2d sum = first;
+    for (std::size_t j = b + 1; j < e; ++j) sum += point(j);
+    if (e > b) sum += last;
+    run.at = (sum / static_cast<double>(run.beams)).cast<float>();
+    Run* prev = runs_.size() > first_new ? &runs_.back() : nullptr;
+    if (prev != nullptr && prev->first2 == kNone &&
+        static_cast<double>((run.at - prev->at).norm()) <= kLegPair_m) {
+      prev->first2 = run.first;
+      prev->last2 = run.last;
+      const float total = static_cast<float>(prev->beams + run.beams);
+      prev->at =
+          (prev->at * static_cast<float>(prev->beams) + run.at * static_cast<float>(run.beams)) /
+          total;
+      prev->beams = static_cast<std::uint16_t>(prev->beams + run.beams);
+    } else {
+      runs_.push_back(run);
+    }
+  };
   for (std::size_t b = 0; b < n;) {
     if (!in_no_object(b)) {
       ++b;
@@ -202,35 +228,11 @@ void OfflineCleaner::add_runs(std::size_t k, const std::vector<Eigen::Vector2d>&
     }
     const int before = beside(static_cast<std::ptrdiff_t>(b) - 1, nearest);
     const int after = beside(static_cast<std::ptrdiff_t>(e) + 1, nearest);
-    // A run at most kLegWidth_m wide, its end points worked out once.
-    const bool stands_out =
-        before > 0 && after > 0 && (before == 1 || after == 1) && nearest < config_.max_range_m;
-    const Eigen::Vector2d first = stands_out ? point(b) : Eigen::Vector2d::Zero();
-    const Eigen::Vector2d last = stands_out ? point(e) : Eigen::Vector2d::Zero();
-    if (stands_out && (last - first).norm() <= kLegWidth_m) {
-      Run run;
-      run.scan = static_cast<std::uint32_t>(k);
-      run.first = static_cast<std::uint16_t>(b);
-      run.last = static_cast<std::uint16_t>(e);
-      run.beams = static_cast<std::uint16_t>(e - b + 1);
-      Eigen::Vector2d sum = first;
-      for (std::size_t j = b + 1; j < e; ++j) sum += point(j);
-      if (e > b) sum += last;
-      run.at = (sum / static_cast<double>(run.beams)).cast<float>();
-      // The other leg of the run before it.
-      Run* prev = runs_.size() > first_new ? &runs_.back() : nullptr;
-      if (prev != nullptr && prev->first2 == kNone &&
-          static_cast<double>((run.at - prev->at).norm()) <= kLegPair_m) {
-        prev->first2 = run.first;
-        prev->last2 = run.last;
-        const float total = static_cast<float>(prev->beams + run.beams);
-        prev->at =
-            (prev->at * static_cast<float>(prev->beams) + run.at * static_cast<float>(run.beams)) /
-            total;
-        prev->beams = static_cast<std::uint16_t>(prev->beams + run.beams);
-      } else {
-        runs_.push_back(run);
-      }
+    if (before > 0 && after > 0 && (before == 1 || after == 1) && nearest < config_.max_range_m) {
+      // It stands out; a run when at most kLegWidth_m wide.
+      const Eigen::Vector2d first = point(b);
+      const Eigen::Vector2d last = point(e);
+      if ((last - first).norm() <= kLegWidth_m) add_run(b, e, first, last);
     }
     b = e + 1;
   }
@@ -424,7 +426,7 @@ bool OfflineCleaner::near_where_it_moved(const Track& track, double stamp_s,
 
 template <typename Window>
 bool OfflineCleaner::through_before_hit(const Eigen::Vector2d& p, std::ptrdiff_t first, int step,
-                                        int needed, Window window, bool alone) const {
+                                        int needed, Window window, LookMode mode) const {
   int through = 0;
   for (std::ptrdiff_t j = first; j >= 0 && j < static_cast<std::ptrdiff_t>(scans_.size());
        j += step) {
@@ -432,11 +434,11 @@ bool OfflineCleaner::through_before_hit(const Eigen::Vector2d& p, std::ptrdiff_t
     const int in = window(scans_[k].stamp_s);
     if (in > 0) break;
     if (in < 0) continue;
-    const Look seen = look(k, p, alone);
+    const Look seen = look(k, p, mode.no_return_margin_m);
     if (seen == Look::kThrough) {
       if (++through >= needed) return true;
     } else if (seen == Look::kHit) {
-      if (!alone || !config_.poses_exact) return false;  // Still (or again) there.
+      if (!mode.hit_restarts) return false;  // Still (or again) there.
       through = 0;
     }
   }
@@ -534,18 +536,17 @@ bool sees_through(const Record& r, const Eigen::Vector2d& q, double index, doubl
 
 }  // namespace
 
-// Scan @p k saw through @p p (sees_through() above), or its beam toward @p p returned within
+// Scan @p k saw through @p p (sees_through() above; a beam that returned nothing only where @p p
+// is @p no_return_margin_m nearer than range_max), or its beam toward @p p returned within
 // free_margin_m of it (a hit), or neither.
 OfflineCleaner::Look OfflineCleaner::look(std::size_t k, const Eigen::Vector2d& p,
-                                          bool alone) const {
+                                          double no_return_margin_m) const {
   const ScanRecord& r = scans_[k];
   if (!r.pose || !(r.angle_increment_rad > 0.0)) return Look::kNeither;
   Eigen::Vector2d q;
   const double index = beam_toward(r, p, q);
-  // A dark surface near the range limit returns now and then: on its own, a place within
-  // free_margin_m of range_max is not seen through by a beam that returned nothing.
-  if (sees_through(r, q, index, config_.max_range_m, config_.free_margin_m,
-                   alone ? config_.free_margin_m : 0.0, kNoReturn, kUnusable)) {
+  if (sees_through(r, q, index, config_.max_range_m, config_.free_margin_m, no_return_margin_m,
+                   kNoReturn, kUnusable)) {
     return Look::kThrough;
   }
   if (!(index >= 0.0 && index < static_cast<double>(r.range_cm.size()))) return Look::kNeither;
@@ -569,7 +570,9 @@ bool OfflineCleaner::seen_through(std::size_t k, const Eigen::Vector2d& p, int s
         if (dt > config_.through_horizon_s) return 1;
         return dt < config_.through_gap_s ? -1 : 0;
       },
-      true);
+      // A dark surface near the range limit returns now and then: on its own, a place within
+      // free_margin_m of range_max is not seen through by a beam that returned nothing.
+      LookMode{config_.free_margin_m, config_.poses_exact});
 }
 
 // Beam @p b of scan @p k returned the same range (kAttached_m) in the scans before and after while

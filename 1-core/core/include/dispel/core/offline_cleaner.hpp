@@ -207,18 +207,25 @@ class OfflineCleaner {
   static Pose2 beam_pose(const ScanRecord& record, std::size_t b);
   // What scan k's beam toward a place in the fixed frame says of it.
   enum class Look : std::uint8_t { kThrough, kHit, kNeither };
-  Look look(std::size_t k, const Eigen::Vector2d& p, bool alone = false) const;
+  // How a walk over the scans looks at a place. Where a track moved (the default), a beam that
+  // returned nothing sees through anything in range, and a hit ends the walk. For the
+  // seen-through rule on its own: a beam that returned nothing sees through only places
+  // no_return_margin_m (free_margin_m) nearer than its range_max, and with exact poses
+  // (CleanConfig::poses_exact) a hit starts the count again.
+  struct LookMode {
+    double no_return_margin_m = 0.0;
+    bool hit_restarts = false;
+  };
+  Look look(std::size_t k, const Eigen::Vector2d& p, double no_return_margin_m) const;
   static double beam_toward(const ScanRecord& r, const Eigen::Vector2d& p, Eigen::Vector2d& q);
   bool attached(std::size_t k, std::size_t b) const;
   // Walks the scans from @p first by @p step; @p window(stamp) says whether a scan is skipped
   // (-1), looked at (0) or ends the walk (1). True when @p needed of them saw through @p p before
-  // one hit it. @p alone: the seen-through rule on its own (not where a track moved): a beam that
-  // returned nothing sees through only places free_margin_m nearer than its range_max, and with
-  // CleanConfig::poses_exact @p needed in a row with no hit among them are enough (a hit starts
-  // the count again).
+  // one hit it (@p mode), or, when a hit restarts the count, @p needed in a row with no hit among
+  // them.
   template <typename Window>
   bool through_before_hit(const Eigen::Vector2d& p, std::ptrdiff_t first, int step, int needed,
-                          Window window, bool alone = false) const;
+                          Window window, LookMode mode = {}) const;
   // Whether the scans from through_gap_s after @p from_s on saw through @p p before one hit it.
   bool left_after(const Eigen::Vector2d& p, double from_s) const;
   bool seen_through(std::size_t k, const Eigen::Vector2d& p, int step) const;

@@ -350,6 +350,49 @@ void OfflineCleaner::finish() {
                       t.object.dynamic_travel_m >= config_.moving_min_travel_m;
     if (t.object.moving) mark_walking(t);
   }
+  find_reach();
+}
+
+void OfflineCleaner::find_reach() {
+  still_ = false;
+  reach_cm_.clear();
+  if (!config_.poses_exact || config_.through_min_scans <= 0 || scans_.empty()) return;
+  const ScanRecord& s0 = scans_.front();
+  const std::size_t n = s0.range_cm.size();
+  if (!s0.pose || n < 3) return;
+  for (std::size_t k = 0; k < scans_.size(); ++k) {
+    const ScanRecord& r = scans_[k];
+    if (!r.pose || r.pose->x_m != s0.pose->x_m || r.pose->y_m != s0.pose->y_m ||
+        r.pose->yaw_rad != s0.pose->yaw_rad || r.range_cm.size() != n ||
+        r.angle_min_rad != s0.angle_min_rad || r.angle_increment_rad != s0.angle_increment_rad ||
+        (r.time_increment_s > 0.0 && (r.motion_per_s.x_m != 0.0 || r.motion_per_s.y_m != 0.0 ||
+                                      r.motion_per_s.yaw_rad != 0.0)) ||
+        (k > 0 && r.stamp_s < scans_[k - 1].stamp_s)) {
+      return;
+    }
+  }
+  still_ = true;
+  const std::size_t blocks = (scans_.size() + kReachBlock - 1) / kReachBlock;
+  reach_cm_.assign(blocks * n, 0);
+  for (std::size_t k = 0; k < scans_.size(); ++k) {
+    const ScanRecord& r = scans_[k];
+    std::uint16_t* reach = &reach_cm_[(k / kReachBlock) * n];
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+      // A place that scan k's beam i sees through is no farther than this (sees_through()).
+      double farthest = std::numeric_limits<double>::infinity();
+      for (std::size_t j = i - 1; j <= i + 1; ++j) {
+        const std::uint16_t c = r.range_cm[j];
+        const double v = c == kUnusable ? -1.0
+                         : c == kNoReturn
+                             ? static_cast<double>(r.range_max_m) - config_.free_margin_m
+                             : static_cast<double>(c) * 0.01 - config_.free_margin_m;
+        farthest = std::min(farthest, v);
+      }
+      if (!(farthest > 0.0)) continue;
+      const double cm = std::min(65535.0, std::ceil(farthest * 100.0) + 1.0);
+      reach[i] = std::max(reach[i], static_cast<std::uint16_t>(cm));
+    }
+  }
 }
 
 // A track walking: over every kWalkWindow_s of its sightings it went at least kWalkSpeed_mps
@@ -428,12 +471,42 @@ template <typename Window>
 bool OfflineCleaner::through_before_hit(const Eigen::Vector2d& p, std::ptrdiff_t first, int step,
                                         int needed, Window window, LookMode mode) const {
   int through = 0;
-  for (std::ptrdiff_t j = first; j >= 0 && j < static_cast<std::ptrdiff_t>(scans_.size());
-       j += step) {
+  const auto size = static_cast<std::ptrdiff_t>(scans_.size());
+  // A still sensor: the place is on the same beam of every scan; blocks of scans whose reach on
+  // it falls short of it cannot see through it, and with no count to restart are skipped.
+  std::size_t beam = 0;
+  double distance = 0.0;
+  // The reach counts a beam that returned nothing as seeing through places free_margin_m short
+  // of its range_max: only for walks that look so.
+  const bool skip = still_ && mode.no_return_margin_m >= config_.free_margin_m;
+  if (skip) {
+    Eigen::Vector2d q;
+    const double index = beam_toward(scans_.front(), p, q);
+    distance = q.norm();
+    const auto n = static_cast<double>(scans_.front().range_cm.size());
+    if (!(index >= 1.0 && index <= n - 2.0 && distance < config_.max_range_m)) return false;
+    beam = static_cast<std::size_t>(index);
+  }
+  const std::size_t beams = skip ? scans_.front().range_cm.size() : 0;
+  const auto block = static_cast<std::ptrdiff_t>(kReachBlock);
+  for (std::ptrdiff_t j = first; j >= 0 && j < size; j += step) {
     const auto k = static_cast<std::size_t>(j);
     const int in = window(scans_[k].stamp_s);
     if (in > 0) break;
     if (in < 0) continue;
+    if (skip && through == 0) {
+      const std::ptrdiff_t start = j / block * block;
+      const std::ptrdiff_t end = std::min(start + block, size) - 1;
+      const std::ptrdiff_t far = step > 0 ? end : start;
+      if (j == (step > 0 ? start : end) &&
+          window(scans_[static_cast<std::size_t>(far)].stamp_s) == 0 &&
+          static_cast<double>(reach_cm_[static_cast<std::size_t>(j / block) * beams + beam]) *
+                  0.01 <
+              distance) {
+        j = far;
+        continue;
+      }
+    }
     const Look seen = look(k, p, mode.no_return_margin_m);
     if (seen == Look::kThrough) {
       if (++through >= needed) return true;

@@ -155,6 +155,63 @@ FilterResult box_tracked(const LaserScan& scan, std::uint64_t id, const Eigen::V
   return tracked(scan, 40, 60, id, position, dynamic);
 }
 
+// A still sensor's walks skip the blocks of scans that cannot see through a place (reach_cm_):
+// the labels must be those of walks that look at every scan. 40 s at 10 Hz: a post that
+// returns nothing in one scan of seven, a board near the range limit that returns nothing in
+// runs of three, a box that stands 12 s 0.4 m before the wall and leaves (the wall's beams
+// then reach 0.1 m beyond it), one that comes at 25 s and stays, and a thing crossing the beams.
+// The same scans with one pose moved by 1 nm walk every scan.
+TEST(OfflineCleaner, AStillSensorsWalksThatSkipScansGiveTheSameLabels) {
+  const auto scan_of = [](int k) {
+    LaserScan s = still_scan(k, 5.6F);
+    const float none = std::numeric_limits<float>::infinity();
+    for (int b = 0; b < 101; ++b) {
+      float r = b < 50 ? 4.0F : none;  // A wall on one side, the open room on the other.
+      if (b >= 10 && b <= 14) r = k % 7 == 3 ? none : 2.0F;        // The post.
+      if (b >= 60 && b <= 70) r = k % 6 < 3 ? none : 5.5F;         // The board.
+      if (b >= 20 && b <= 30 && k < 120) r = 3.6F;                 // Stands, leaves.
+      if (b >= 75 && b <= 85 && k >= 250) r = 3.0F;                // Comes, stays.
+      if (std::abs(b - (k % 100)) <= 2 && k % 100 < 95) r = 1.0F;  // Crosses.
+      s.ranges_m.push_back(r);
+    }
+    return s;
+  };
+  CleanConfig config;
+  config.through_min_scans = 2;
+  config.poses_exact = true;
+  std::vector<std::vector<CleanLabel>> by_walk[2];
+  std::int64_t vacated[2] = {0, 0};
+  for (const int nudged : {0, 1}) {
+    OfflineCleaner cleaner(config);
+    for (int k = 0; k < 400; ++k) {
+      const LaserScan s = scan_of(k);
+      FilterResult r = all_static(s);
+      if (nudged == 1 && k == 200) r.sensor_pose = Pose2{1e-9, 0.0, 0.0};
+      cleaner.add(s, r);
+    }
+    cleaner.finish();
+    std::vector<CleanLabel> labels;
+    for (int k = 0; k < 400; ++k) {
+      cleaner.label(static_cast<std::size_t>(k), scan_of(k), labels);
+      by_walk[nudged].push_back(labels);
+    }
+    vacated[nudged] = cleaner.counts().vacated;
+  }
+  EXPECT_GT(vacated[0], 120 * 11 / 2);  // At least half the box that stood and left.
+  EXPECT_EQ(vacated[0], vacated[1]);
+  for (int k = 0; k < 400; ++k) {
+    if (k == 200) continue;  // The nudged scan's own place moved by 1 nm.
+    ASSERT_EQ(by_walk[0][static_cast<std::size_t>(k)], by_walk[1][static_cast<std::size_t>(k)])
+        << "scan " << k;
+    const LaserScan s = scan_of(k);
+    for (int b = 10; b <= 14; ++b) {
+      if (s.ranges_m[static_cast<std::size_t>(b)] != 2.0F) continue;  // Crossed, or no return.
+      EXPECT_FALSE(removed(by_walk[0][static_cast<std::size_t>(k)][static_cast<std::size_t>(b)]))
+          << "the post, scan " << k;
+    }
+  }
+}
+
 // negative_2 (a real robot, laser-only, no people): a track dynamic for three scans in which it
 // hardly moved, whose centroid then slid 2-4 m while it was static (a wall piece on drifting
 // poses), counted as moving by its travel from where it was first seen and kept its false

@@ -298,6 +298,14 @@ class OfflineCleaner {
       points_;  // label(): each beam's end in the fixed frame, NaN: not yet.
   CleanCounts counts_;
   bool finished_ = false;
+  // A still sensor (CleanConfig::poses_exact, every scan with the same pose, geometry and no
+  // motion, stamps in order): a place is on the same beam in every scan. finish() then keeps, per
+  // block of kReachBlock scans and beam, the farthest place any of its scans could see through
+  // on that beam (reach_cm_), so that a walk skips the blocks that cannot see through a place.
+  static constexpr std::size_t kReachBlock = 32;
+  bool still_ = false;
+  std::vector<std::uint16_t> reach_cm_;  // [block * beams + beam], rounded up, +1 cm.
+  void find_reach();
 };
 
 }  // namespace dispel

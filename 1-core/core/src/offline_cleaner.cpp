@@ -436,8 +436,8 @@ void OfflineCleaner::mark_walking(Track& track) {
         const auto& at = seen[static_cast<std::size_t>(a)];
         const double dt = std::abs(at.stamp_s - s.stamp_s);
         if (static_cast<double>((at.position - s.position).norm()) < kWalkSpeed_mps * dt) break;
+        if (!s.walking) ++track.object.walking_scans;  // Walked out of one, into the next.
         s.walking = true;
-        ++track.object.walking_scans;
       }
     }
   }

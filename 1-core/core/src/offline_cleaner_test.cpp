@@ -344,6 +344,14 @@ TEST(OfflineCleaner, APersonWhoseTrackWalkedInFromFarIsRemovedFromTheFirstScanAn
     }
     EXPECT_EQ(wall_removed, 0);
     EXPECT_EQ(post_removed, 0);
+    // Track 7 walked into its stretch from its first sighting, or, in the second case, from
+    // where it jumped from the post to the passer-by (scan 20).
+    const auto objects = cleaner.objects();
+    const auto seven = std::find_if(objects.begin(), objects.end(),
+                                    [](const CleanedObject& o) { return o.track_id == 7; });
+    ASSERT_NE(seven, objects.end());
+    EXPECT_TRUE(seven->moving);
+    EXPECT_EQ(seven->walking_scans, takeover ? 10 : 30);
     if (takeover) {
       EXPECT_GT(person_kept_far, 0);  // On another track before scan 20, one that never moved.
     } else {

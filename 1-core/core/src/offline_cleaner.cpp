@@ -350,7 +350,51 @@ void OfflineCleaner::finish() {
                       t.object.dynamic_travel_m >= config_.moving_min_travel_m;
     if (t.object.moving) mark_walking(t);
   }
+  set_off_.clear();
+  for (const Track& t : tracks_) {
+    if (!t.object.moving) continue;
+    bool was = false;
+    for (const Track::Sighting& s : t.seen) {
+      const bool now = s.dynamic || s.walking;
+      if (now && !was) set_off_.emplace_back(s.stamp_s, s.position);
+      was = now;
+    }
+  }
+  std::sort(set_off_.begin(), set_off_.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
   find_reach();
+}
+
+// A person who stands before walking off is often in no object (a few beams at range) or on a
+// track of their own that never moved: nothing links their standing to the track they walk on.
+// A small thing within kSetOff_m of where a moving track set off later, whose place was left
+// after (left_after()), stood there: removed. It must have been hit in kStoodShare of the scans
+// that looked at its place from its scan until the track set off: a thing that the scan plane
+// meets only now and then (a low thing as the robot pitches, vegetation outdoors) is seen through
+// as often as it is hit. Measured on the real person_following_outdoor_1: without that check, 0.948
+// of the background kept; with it, 0.9717 (0.9727 without the rule).
+constexpr double kSetOff_m = 0.5;
+constexpr double kStoodShare = 2.0 / 3.0;
+
+bool OfflineCleaner::stood_where_one_set_off(std::size_t k, std::size_t b,
+                                             const Eigen::Vector2d& p) const {
+  const double t = scans_[k].stamp_s;
+  auto it = std::upper_bound(set_off_.begin(), set_off_.end(), t,
+                             [](double v, const auto& s) { return v < s.first; });
+  for (; it != set_off_.end() && it->first <= t + config_.through_horizon_s; ++it) {
+    if ((it->second.cast<double>() - p).norm() > kSetOff_m) continue;
+    if (attached(k, b) || !left_after(p, it->first)) continue;
+    int hits = 0, looks = 0;
+    for (std::size_t j = k + 1; j < scans_.size() && scans_[j].stamp_s < it->first; ++j) {
+      const Look seen = look(j, p, config_.free_margin_m);
+      hits += seen == Look::kHit ? 1 : 0;
+      looks += seen == Look::kNeither ? 0 : 1;
+    }
+    if (looks > 0 && static_cast<double>(hits) >= kStoodShare * static_cast<double>(looks)) {
+      return true;
+    }
+  }
+  return false;
 }
 
 void OfflineCleaner::find_reach() {
@@ -743,6 +787,19 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
       left_[o] = tally[o].second > 0 && 2 * tally[o].second >= tally[o].first ? 1 : 0;
     }
   }
+  set_off_votes_.assign(static_cast<std::size_t>(groups), Vote{});
+  if (record.pose && !set_off_.empty()) {
+    for (std::size_t b = 0; b < n; ++b) {
+      if (group_[b] >= 0) ++set_off_votes_[static_cast<std::size_t>(group_[b])].beams;
+    }
+    for (std::size_t b = 0; b < n; ++b) {
+      if (group_[b] < 0) continue;
+      Vote& vote = set_off_votes_[static_cast<std::size_t>(group_[b])];
+      if (vote.settled()) continue;
+      ++vote.asked;
+      if (stood_where_one_set_off(index, b, point(b))) ++vote.through;
+    }
+  }
   votes_.assign(static_cast<std::size_t>(groups), Vote{});
   if (config_.through_min_scans > 0 && record.pose) {
     for (std::size_t b = 0; b < n; ++b) {
@@ -779,8 +836,11 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
     }
     Track* t = track != kNone32 ? &tracks_[track] : nullptr;
     const bool moving = t != nullptr && t->object.moving;
-    // Its object's place was left where its track moved at another time (left_).
-    const bool moved_later = t != nullptr && left_[record.object[b]] == 1;
+    // Its object's place was left where its track moved at another time (left_), or it stood
+    // where a track set off later.
+    const bool moved_later =
+        (t != nullptr && left_[record.object[b]] == 1) ||
+        (group_[b] >= 0 && set_off_votes_[static_cast<std::size_t>(group_[b])].vacated());
     const bool vacated =
         group_[b] >= 0 && !moved_later && votes_[static_cast<std::size_t>(group_[b])].vacated();
     CleanLabel label;

@@ -155,6 +155,93 @@ FilterResult box_tracked(const LaserScan& scan, std::uint64_t id, const Eigen::V
   return tracked(scan, 40, 60, id, position, dynamic);
 }
 
+// Someone who stood in no object (scans 0-19, 10 Hz, at (2, 0) before a wall 5 m away) and
+// then walked off on a track of their own (7, found moving from scan 20, 0.5 m/s along y). Nothing
+// links the two but the place: the track set off where the person stood, and the place was left
+// after. Within 0.5 m of it stand a post (hit after: it stays), and a small thing that flickers
+// (hit in every other scan before the track set off, as a scan plane meets a low thing now and
+// then: it stays although it is gone after).
+TEST(OfflineCleaner, WhatStoodWhereATrackSetOffLaterIsRemoved) {
+  const auto unit = [](int b) {
+    const double bearing = -0.5 + 0.01 * b;
+    return Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+  };
+  // Where beam @p b meets a disc of @p radius at @p c, or infinity.
+  const auto disc = [&](int b, const Eigen::Vector2d& c, double radius) {
+    const double along = c.dot(unit(b));
+    return (along * unit(b) - c).norm() <= radius ? along : HUGE_VAL;
+  };
+  const Eigen::Vector2d post(2.2, 0.4), flicker(1.8, -0.42);
+  const auto person = [](int k) { return Eigen::Vector2d(2.0, k < 20 ? 0.0 : 0.05 * (k - 20)); };
+  enum Thing { kWall, kPerson, kPost, kFlicker };
+  const auto thing_of = [&](int k, int b) {
+    double r = 5.0 / unit(b).x();
+    Thing what = kWall;
+    const auto nearer = [&](double d, Thing t) {
+      if (d < r) {
+        r = d;
+        what = t;
+      }
+    };
+    nearer(disc(b, person(k), 0.2), kPerson);
+    nearer(disc(b, post, 0.1), kPost);
+    if (k < 20 && k % 2 == 0) nearer(disc(b, flicker, 0.08), kFlicker);
+    return std::make_pair(what, r);
+  };
+  const auto scan_of = [&](int k) {
+    LaserScan s = still_scan(k, 30.0F);
+    for (int b = 0; b < 101; ++b) s.ranges_m.push_back(static_cast<float>(thing_of(k, b).second));
+    return s;
+  };
+  OfflineCleaner cleaner{CleanConfig{}};
+  for (int k = 0; k < 40; ++k) {
+    const LaserScan s = scan_of(k);
+    if (k < 20) {
+      cleaner.add(s, all_static(s));  // The standing person in no object.
+      continue;
+    }
+    int first = -1, last = -1;
+    for (int b = 0; b < 101; ++b) {
+      if (thing_of(k, b).first != kPerson) continue;
+      if (first < 0) first = b;
+      last = b;
+    }
+    ASSERT_GE(first, 0) << "scan " << k;
+    cleaner.add(s, tracked(s, first, last, 7, person(k), true));
+  }
+  cleaner.finish();
+  std::vector<CleanLabel> labels;
+  int person_kept = 0, post_removed = 0, flicker_removed = 0, flicker_beams = 0, wall_removed = 0;
+  for (int k = 0; k < 20; ++k) {
+    cleaner.label(static_cast<std::size_t>(k), scan_of(k), labels);
+    for (int b = 0; b < 101; ++b) {
+      const bool gone = removed(labels[static_cast<std::size_t>(b)]);
+      switch (thing_of(k, b).first) {
+        case kPerson:
+          person_kept += gone || k == 19 ? 0 : 1;
+          if (gone) EXPECT_EQ(labels[static_cast<std::size_t>(b)], CleanLabel::kMovedLater);
+          break;
+        case kPost:
+          post_removed += gone ? 1 : 0;
+          break;
+        case kFlicker:
+          ++flicker_beams;
+          flicker_removed += gone ? 1 : 0;
+          break;
+        case kWall:
+          wall_removed += gone ? 1 : 0;
+          break;
+      }
+    }
+  }
+  // All but the last scan before it set off: no scan between them tells that it stood.
+  EXPECT_EQ(person_kept, 0);
+  EXPECT_EQ(post_removed, 0);
+  EXPECT_GT(flicker_beams, 10);
+  EXPECT_EQ(flicker_removed, 0);
+  EXPECT_EQ(wall_removed, 0);
+}
+
 // A still sensor's walks skip the blocks of scans that cannot see through a place (reach_cm_):
 // the labels must be those of walks that look at every scan. 40 s at 10 Hz: a post that
 // returns nothing in one scan of seven, a board near the range limit that returns nothing in

@@ -92,7 +92,7 @@ enum class CleanLabel : std::uint8_t {
   kUnknown = 2,     ///< Removed: the online filter's unknown (POG).
   kNoObject = 3,    ///< Kept: in no object.
   kInvalid = 4,     ///< No usable range: untouched.
-  kMovedLater = 5,  ///< Removed: its object moved at another time (retroactive removal).
+  kMovedLater = 5,  ///< Removed: its object moved at another time (or stood where one set off).
   kVacated = 6,   ///< Removed: the scanner saw through its place later or earlier (it left, came).
   kRestored = 7,  ///< Kept: the online filter removed it, but its object never moved.
   /// Removed: in no object (a leg at range, too few beams for one) on a chain of such runs of
@@ -235,6 +235,13 @@ class OfflineCleaner {
   static double next_moving_s(const Track& track, double stamp_s);
   bool near_where_it_moved(const Track& track, double stamp_s,
                            const Eigen::Vector2f& position) const;
+  // Where and when a moving track set off: its first sighting of each stretch in which it was
+  // found moving or walking, in time order (finish()).
+  std::vector<std::pair<double, Eigen::Vector2f>> set_off_;
+  // Whether a thing at @p p in scan @p k stood where a track set off later: within kSetOff_m of
+  // where one set off within through_horizon_s, the place left after (left_after()), and hit in
+  // kStoodShare of the scans that looked at it from scan @p k until then.
+  bool stood_where_one_set_off(std::size_t k, std::size_t b, const Eigen::Vector2d& p) const;
   // finish(): marks @p track's sightings next to a dynamic one from which it walked on without
   // a pause (walking()).
   static void mark_walking(Track& track);
@@ -292,7 +299,8 @@ class OfflineCleaner {
   };
   std::vector<std::int32_t> group_;
   std::vector<Vote> votes_;
-  std::vector<std::uint8_t> left_;  // label(): per object, see left_after().
+  std::vector<std::uint8_t> left_;   // label(): per object, see left_after().
+  std::vector<Vote> set_off_votes_;  // label(): per thing, stood_where_one_set_off().
   std::vector<std::pair<std::int32_t, std::int32_t>> left_votes_;
   std::vector<Eigen::Vector2d>
       points_;  // label(): each beam's end in the fixed frame, NaN: not yet.

@@ -80,8 +80,10 @@ void filter_and_clean(const std::string& scenario_name, std::uint64_t seed, Filt
 // 1), filtered online and cleaned offline: the cleaner removes far more of the people while they
 // stand (the online filter cannot know yet that they will walk) and keeps the walls; legs at
 // range, too few beams for an object, are followed from scan to scan and removed where they
-// walked. Measured: still people removed 0.087 online, 0.285 clean; moving 0.597, 0.787 (0.620
-// without the legs at range); walls kept 1.0000, 0.99996.
+// walked; a person who stood in no object (a few beams at range) is removed where a track set off
+// from their place later. Measured: still people removed 0.087 online, 0.348 clean (0.285 before
+// the set-off rule); moving 0.597, 0.794 (0.620 without the legs at range); walls kept 1.0000,
+// 0.99996.
 TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
   FilterJobOptions f;
   f.scale_to_scanner = true;
@@ -94,12 +96,12 @@ TEST(CleanJob, PeopleWhoStandAndThenWalkAwayAreRemovedBeforeTheyWalk) {
   const eval::Rates& online = run.online;
   const eval::Rates& clean = run.clean;
   EXPECT_GT(clean.still_beams, 5000);
-  EXPECT_GE(clean.still_removed_rate(), 0.25);
+  EXPECT_GE(clean.still_removed_rate(), 0.3);
   EXPECT_GE(clean.still_removed_rate(), 3.0 * online.still_removed_rate());
   // Of them, those who walk off later (the rest walked in and stay to the end): 0.029 online,
-  // 0.453 clean.
+  // 0.589 clean (0.453 before the set-off rule).
   EXPECT_GT(clean.still_moves_later_beams, 2000);
-  EXPECT_GE(clean.still_moves_later_removed_rate(), 0.4);
+  EXPECT_GE(clean.still_moves_later_removed_rate(), 0.5);
   EXPECT_GE(clean.still_moves_later_removed_rate(), 10.0 * online.still_moves_later_removed_rate());
   EXPECT_GE(clean.rejection_rate(), online.rejection_rate() + 0.15);
   EXPECT_GT(stats.counts.walked_legs, 300);

@@ -787,35 +787,28 @@ void OfflineCleaner::label(std::size_t index, const LaserScan& scan, std::vector
       left_[o] = tally[o].second > 0 && 2 * tally[o].second >= tally[o].first ? 1 : 0;
     }
   }
-  set_off_votes_.assign(static_cast<std::size_t>(groups), Vote{});
-  if (record.pose && !set_off_.empty()) {
+  // Per thing, whether the majority of its beams @p says so (when @p ask at all); once that is
+  // settled, its other beams are not asked.
+  const auto vote = [&](std::vector<Vote>& votes, bool ask, const auto& says) {
+    votes.assign(static_cast<std::size_t>(groups), Vote{});
+    if (!ask) return;
     for (std::size_t b = 0; b < n; ++b) {
-      if (group_[b] >= 0) ++set_off_votes_[static_cast<std::size_t>(group_[b])].beams;
+      if (group_[b] >= 0) ++votes[static_cast<std::size_t>(group_[b])].beams;
     }
     for (std::size_t b = 0; b < n; ++b) {
       if (group_[b] < 0) continue;
-      Vote& vote = set_off_votes_[static_cast<std::size_t>(group_[b])];
-      if (vote.settled()) continue;
-      ++vote.asked;
-      if (stood_where_one_set_off(index, b, point(b))) ++vote.through;
+      Vote& v = votes[static_cast<std::size_t>(group_[b])];
+      if (v.settled()) continue;
+      ++v.asked;
+      if (says(b)) ++v.through;
     }
-  }
-  votes_.assign(static_cast<std::size_t>(groups), Vote{});
-  if (config_.through_min_scans > 0 && record.pose) {
-    for (std::size_t b = 0; b < n; ++b) {
-      if (group_[b] >= 0) ++votes_[static_cast<std::size_t>(group_[b])].beams;
-    }
-    for (std::size_t b = 0; b < n; ++b) {
-      if (group_[b] < 0) continue;
-      Vote& vote = votes_[static_cast<std::size_t>(group_[b])];
-      if (vote.settled()) continue;
-      ++vote.asked;
-      const Eigen::Vector2d& p = point(b);
-      if (!attached(index, b) && (seen_through(index, p, 1) || seen_through(index, p, -1))) {
-        ++vote.through;
-      }
-    }
-  }
+  };
+  vote(set_off_votes_, record.pose.has_value() && !set_off_.empty(),
+       [&](std::size_t b) { return stood_where_one_set_off(index, b, point(b)); });
+  vote(votes_, config_.through_min_scans > 0 && record.pose.has_value(), [&](std::size_t b) {
+    const Eigen::Vector2d& p = point(b);
+    return !attached(index, b) && (seen_through(index, p, 1) || seen_through(index, p, -1));
+  });
   in_walked_leg_.assign(n, 0);
   const std::size_t runs_end =
       index + 1 < runs_begin_.size() ? runs_begin_[index + 1] : runs_.size();

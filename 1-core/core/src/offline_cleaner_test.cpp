@@ -128,7 +128,7 @@ FilterResult tracked(const LaserScan& scan, int first, int last, std::uint64_t i
   thing.first_beam = first;
   thing.last_beam = last;
   thing.point_count = last - first + 1;
-  const auto at = [&](int b) {
+  const auto at = [&](int b) -> Eigen::Vector2d {
     const double bearing = scan.angle_min_rad + scan.angle_increment_rad * b;
     return static_cast<double>(scan.ranges_m[static_cast<std::size_t>(b)]) *
            Eigen::Vector2d(std::cos(bearing), std::sin(bearing));

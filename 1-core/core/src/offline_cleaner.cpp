@@ -575,7 +575,8 @@ bool OfflineCleaner::left_after(const Eigen::Vector2d& p, double from_s) const {
                        [](const ScanRecord& r, double t) { return r.stamp_s < t; }) -
       scans_.begin();
   const double end = start + config_.through_horizon_s;
-  return through_before_hit(p, first, 1, kLeftScans, [end](double t) { return t <= end ? 0 : 1; });
+  return through_before_hit(
+      p, first, 1, kLeftScans, [end](double t) { return t <= end ? 0 : 1; }, LookMode{});
 }
 
 // When @p track was next found moving at or after @p stamp_s (its last time if never).

@@ -225,7 +225,7 @@ class OfflineCleaner {
   // them.
   template <typename Window>
   bool through_before_hit(const Eigen::Vector2d& p, std::ptrdiff_t first, int step, int needed,
-                          Window window, LookMode mode = {}) const;
+                          Window window, LookMode mode) const;
   // Whether the scans from through_gap_s after @p from_s on saw through @p p before one hit it.
   bool left_after(const Eigen::Vector2d& p, double from_s) const;
   bool seen_through(std::size_t k, const Eigen::Vector2d& p, int step) const;

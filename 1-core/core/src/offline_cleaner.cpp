@@ -383,7 +383,8 @@ bool OfflineCleaner::stood_where_one_set_off(std::size_t k, std::size_t b,
                              [](double v, const auto& s) { return v < s.first; });
   for (; it != set_off_.end() && it->first <= t + config_.through_horizon_s; ++it) {
     if ((it->second.cast<double>() - p).norm() > kSetOff_m) continue;
-    if (attached(k, b) || !left_after(p, it->first)) continue;
+    if (attached(k, b)) return false;  // Part of the robot: the same for every set-off.
+    if (!left_after(p, it->first)) continue;
     int hits = 0, looks = 0;
     for (std::size_t j = k + 1; j < scans_.size() && scans_[j].stamp_s < it->first; ++j) {
       const Look seen = look(j, p, config_.free_margin_m);

@@ -190,7 +190,7 @@ class OfflineCleaner {
     // Where it was when the online filter found it moving, in time order.
     std::vector<std::pair<double, Eigen::Vector2f>> moving_at;
     // Every sighting, in time order; finish() marks those in which it was walking into or out of
-    // a stretch the online filter found it moving (walking_into()).
+    // a stretch the online filter found it moving (walking()).
     struct Sighting {
       double stamp_s = 0.0;
       Eigen::Vector2f position = Eigen::Vector2f::Zero();
@@ -207,7 +207,7 @@ class OfflineCleaner {
   static Pose2 beam_pose(const ScanRecord& record, std::size_t b);
   // What scan k's beam toward a place in the fixed frame says of it.
   enum class Look : std::uint8_t { kThrough, kHit, kNeither };
-  // How a walk over the scans looks at a place. Where a track moved (the default), a beam that
+  // How a walk over the scans looks at a place. Where a track moved (LookMode{}), a beam that
   // returned nothing sees through anything in range, and a hit ends the walk. For the
   // seen-through rule on its own: a beam that returned nothing sees through only places
   // no_return_margin_m (free_margin_m) nearer than its range_max, and with exact poses

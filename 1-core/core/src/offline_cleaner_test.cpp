@@ -219,7 +219,9 @@ TEST(OfflineCleaner, WhatStoodWhereATrackSetOffLaterIsRemoved) {
       switch (thing_of(k, b).first) {
         case kPerson:
           person_kept += gone || k == 19 ? 0 : 1;
-          if (gone) EXPECT_EQ(labels[static_cast<std::size_t>(b)], CleanLabel::kMovedLater);
+          if (gone) {
+            EXPECT_EQ(labels[static_cast<std::size_t>(b)], CleanLabel::kMovedLater);
+          }
           break;
         case kPost:
           post_removed += gone ? 1 : 0;

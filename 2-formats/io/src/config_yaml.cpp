@@ -220,6 +220,7 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   b.number("registration.explained_max_age_s", g.explained_max_age_s);
   b.number("registration.slide_tolerance_mps", g.slide_tolerance_mps);
   b.boolean("registration.deskew", g.deskew);
+  b.boolean("registration.deskew_laser_only_turn", g.deskew_laser_only_turn);
   b.number("registration.lateral_noise_mps", g.lateral_noise_mps);
   b.number("registration.fallback_turn_decay_s", g.fallback_turn_decay_s);
   b.boolean("registration.leave_out_moving", g.leave_out_moving);

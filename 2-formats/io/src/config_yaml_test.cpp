@@ -74,6 +74,7 @@ void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d
   EXPECT_EQ(loaded.free_space.min_object_share, d.free_space.min_object_share);
   EXPECT_EQ(loaded.free_space.mark_beside_dynamic, d.free_space.mark_beside_dynamic);
   EXPECT_EQ(loaded.registration.deskew, d.registration.deskew);
+  EXPECT_EQ(loaded.registration.deskew_laser_only_turn, d.registration.deskew_laser_only_turn);
   EXPECT_EQ(loaded.registration.align, d.registration.align);
   EXPECT_EQ(loaded.registration.slide_tolerance_mps, d.registration.slide_tolerance_mps);
   EXPECT_EQ(loaded.registration.lateral_noise_mps, d.registration.lateral_noise_mps);

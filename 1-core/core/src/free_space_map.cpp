@@ -193,7 +193,8 @@ int FreeSpaceMap::hit_balance(const Eigen::Vector2d& point_m) const {
 // Every kCoarsestStride-th beam is traced from the scanner on; see add_scan().
 constexpr std::size_t kCoarsestStride = 16;
 
-void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
+void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose,
+                            double turn_per_beam_rad) {
   const Eigen::Vector2d origin = sensor_pose.translation();
   if (!(std::isfinite(origin.x()) && std::isfinite(origin.y()))) return;
   if (!placed_) {
@@ -210,7 +211,7 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
     constexpr double kFar = 1099511627776.0;
     if (!(std::abs(fx) < kFar && std::abs(fy) < kFar)) {
       clear();
-      add_scan(scan, sensor_pose);
+      add_scan(scan, sensor_pose, turn_per_beam_rad);
       return;
     }
     sensor_tx_ = static_cast<std::int64_t>(fx) >> kTileBits;
@@ -227,7 +228,23 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose) {
   const std::vector<Eigen::Vector2d>& unit = beam_directions_.of(scan);
   const PoseTransform to_fixed(sensor_pose);
   directions_.resize(scan.size());
-  for (std::size_t b = 0; b < scan.size(); ++b) directions_[b] = to_fixed.rotate(unit[b]);
+  if (turn_per_beam_rad == 0.0) {
+    for (std::size_t b = 0; b < scan.size(); ++b) directions_[b] = to_fixed.rotate(unit[b]);
+  } else {
+    // Beam b turned by b steps: the rotation by recurrence (one sine and cosine per scan).
+    const double cs = std::cos(turn_per_beam_rad), ss = std::sin(turn_per_beam_rad);
+    double cb = 1.0, sb = 0.0;
+    for (std::size_t b = 0; b < scan.size(); ++b) {
+      if (b > 0) {
+        const double c_next = cb * cs - sb * ss;
+        sb = sb * cs + cb * ss;
+        cb = c_next;
+      }
+      const Eigen::Vector2d& u = unit[b];
+      directions_[b] =
+          to_fixed.rotate(Eigen::Vector2d(cb * u.x() - sb * u.y(), sb * u.x() + cb * u.y()));
+    }
+  }
   const int cap = config_.min_free_observations + config_.max_recent_hits;
   const auto free_s = static_cast<float>(scan.stamp_s - epoch_s_);
   // Beam spacing per cell of range, in kSpacingUnit_m.

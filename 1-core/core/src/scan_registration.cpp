@@ -266,6 +266,7 @@ bool ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motio
   // The motion from the stamp to beam b's time is b steps of one beam's: its rotation by
   // recurrence (one sine and cosine per scan), its translation to first order in time.
   const double step_yaw = motion_per_s.yaw_rad * ti;
+  deskew_turn_per_beam_rad_ = deskew ? step_yaw : 0.0;
   const double cs = std::cos(step_yaw), ss = std::sin(step_yaw);
   double c = 1.0, s = 0.0;
   for (std::size_t b = 0; b < n; ++b) {
@@ -760,62 +761,54 @@ Pose2 ScanRegistration::register_scan(const LaserScan& scan,
           }
         }
       }
-      // The scan was de-skewed by a turn that the registration then found wrong (a slip starts or
-      // ends within the odometry's motion since the previous scan): when the difference bends
-      // the sweep by more than kRebend_m at kThresholdRange_m, the scan is de-skewed again by the
-      // registered turn and aligned again from the registered pose, which the odometry no longer
-      // holds (constant-velocity noise); up to kMaxRealignments times, as each alignment of a
-      // bent scan is itself a little off.
-      if (odometry_pose && dt > 0.0) {
+      // De-skews the scan by its registered turn and aligns it again from the registered pose
+      // while that turn bends the sweep by more than @p rebend_m at kThresholdRange_m against the
+      // turn it was de-skewed by (@p bent_by, whose translation is kept), up to @p times.
+      // The prior is at @p prior_at, or at each alignment's start when nullptr (constant-velocity
+      // noise either way); the correction is counted from @p from_seed.
+      const auto bend_back = [&](int times, double rebend_m, Pose2 bent_by, const Pose2& from_seed,
+                                 const Pose2* prior_at) {
         const double sweep_s = scan.time_increment_s * static_cast<double>(scan.size());
-        for (int again = 0; again < kMaxRealignments && report.registered; ++again) {
+        for (int again = 0; again < times && report.registered; ++again) {
           const Pose2 moved = previous_pose_.inverse() * pose;
           const double turn_per_s = moved.yaw_rad / dt;
           const double bend_m =
-              std::abs(turn_per_s - deskewed_per_s.yaw_rad) * sweep_s * kThresholdRange_m;
-          if (!(bend_m > kRebend_m)) break;
-          const Pose2 turned{deskewed_per_s.x_m, deskewed_per_s.y_m, turn_per_s};
+              std::abs(turn_per_s - bent_by.yaw_rad) * sweep_s * kThresholdRange_m;
+          if (!(bend_m > rebend_m)) break;
+          const Pose2 turned{bent_by.x_m, bent_by.y_m, turn_per_s};
           if (!thin_and_deskew(scan, turned, true)) break;
           RegistrationReport realigned = report;
           realigned.registered = realigned.fallback = realigned.degenerate = false;
-          const Pose2 p = align(pose, moved, threshold, SeedNoise::kGuess, realigned);
+          const Pose2 p =
+              prior_at != nullptr
+                  ? align(pose, delta, threshold, SeedNoise::kGuess, realigned, prior_at)
+                  : align(pose, moved, threshold, SeedNoise::kGuess, realigned);
           if (!realigned.registered) {
-            thin_and_deskew(scan, deskewed_per_s, true);
+            thin_and_deskew(scan, bent_by, true);
             break;
           }
-          realigned.correction = used_seed.inverse() * p;
+          realigned.correction = from_seed.inverse() * p;
           ++realigned.realignments;
           report = realigned;
           pose = p;
-          deskewed_per_s = turned;
+          bent_by = turned;
         }
+      };
+      // The scan was de-skewed by a turn that the registration then found wrong (a slip starts or
+      // ends within the odometry's motion since the previous scan): when the difference bends
+      // the sweep by more than kRebend_m, it is bent back from the registered pose, which the
+      // odometry no longer holds; up to kMaxRealignments times, as each alignment of a bent scan
+      // is itself a little off.
+      if (odometry_pose && dt > 0.0) {
+        bend_back(kMaxRealignments, kRebend_m, deskewed_per_s, used_seed, nullptr);
       }
-      // Laser-only, the scan was de-skewed by the guess's turn: when the registered turn bends
-      // the sweep by more than kLaserOnlyRebend_m at kThresholdRange_m against it, the scan is
-      // de-skewed by the registered turn and aligned again from the registered pose, up to
-      // kLaserOnlyRealignments times. The guess stays the prior (each alignment from an earlier
-      // one's pose with the prior there walked along a corridor, where the scan says little).
+      // Laser-only, the scan was de-skewed by the guess's turn: it is bent back by the registered
+      // turn beyond kLaserOnlyRebend_m, up to kLaserOnlyRealignments times. The guess stays the
+      // prior (each alignment from an earlier one's pose with the prior there walked along a
+      // corridor, where the scan says little).
       if (laser_only_turn) {
-        const double sweep_s = scan.time_increment_s * static_cast<double>(scan.size());
-        double deskewed_turn = motion_per_s.yaw_rad;
-        for (int again = 0; again < kLaserOnlyRealignments && report.registered; ++again) {
-          const double turn_per_s = (previous_pose_.inverse() * pose).yaw_rad / dt;
-          const double bend_m = std::abs(turn_per_s - deskewed_turn) * sweep_s * kThresholdRange_m;
-          if (!(bend_m > kLaserOnlyRebend_m)) break;
-          if (!thin_and_deskew(scan, Pose2{0.0, 0.0, turn_per_s}, true)) break;
-          RegistrationReport realigned = report;
-          realigned.registered = realigned.fallback = realigned.degenerate = false;
-          const Pose2 p = align(pose, delta, threshold, SeedNoise::kGuess, realigned, &seed);
-          if (!realigned.registered) {
-            thin_and_deskew(scan, Pose2{0.0, 0.0, deskewed_turn}, true);
-            break;
-          }
-          realigned.correction = seed.inverse() * p;
-          ++realigned.realignments;
-          report = realigned;
-          pose = p;
-          deskewed_turn = turn_per_s;
-        }
+        bend_back(kLaserOnlyRealignments, kLaserOnlyRebend_m, Pose2{0.0, 0.0, motion_per_s.yaw_rad},
+                  seed, &seed);
       }
       if (report.registered &&
           (delta.translation().norm() > kMinMotionForThreshold_m ||

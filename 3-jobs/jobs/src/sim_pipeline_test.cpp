@@ -275,19 +275,23 @@ FilteredScenario simulate_and_filter(
 // widened, was matched to a low thing first seen up close nearby and stayed dynamic while it
 // stood (still_scans_to_static), its beams never learned by the map: 0.9963 kept without
 // classification.still_alone_to_static_s (a dynamic track that stood still for 1 s where it was
-// seen again after scans unseen, with no dynamic track beside it, is static again).
+// seen again after scans unseen, with no dynamic track beside it, is static again), 0.9983 with
+// it. Both were while free space was traced along the beams as placed from the scan's stamp,
+// not as the registration de-skewed them: at a corner the end of each sweep then lay off the
+// walls of the next scans. Traced along the de-skewed beams: 0.9995 kept, and 0.9994 without
+// that rule (docs/results.md, "Free space along the de-skewed beams").
 TEST(SimPipeline, DrivingRobotAlongRoughCorridorsKeepsItsWalls) {
   const FilteredScenario office = simulate_and_filter(
       "office_corridors",
       {[](DynamicFilterConfig& c) { c.free_space.mark_beside_dynamic = false; },
        [](DynamicFilterConfig& c) { c.classification.still_alone_to_static_s = 0.0; }});
-  EXPECT_GE(office.rates.preservation_rate(), 0.997);
+  EXPECT_GE(office.rates.preservation_rate(), 0.999);
   EXPECT_GE(office.rates.rejection_rate(), 0.85);
   const eval::Rates& without_beside = office.variant_rates.at(0);
   EXPECT_GE(without_beside.preservation_rate(), 0.995);
   EXPECT_GE(office.rates.rejection_rate() - without_beside.rejection_rate(), 0.04);
   const eval::Rates& without_still = office.variant_rates.at(1);
-  EXPECT_GE(office.rates.preservation_rate() - without_still.preservation_rate(), 0.001);
+  EXPECT_GE(without_still.preservation_rate(), 0.999);
   // The first scans may fall back to the odometry while the map is young (measured: 461 of 462
   // registered; 443 of 457 before the robot rounded its corners).
   EXPECT_GE(static_cast<double>(office.stats.counters.scans_registered),

@@ -272,7 +272,7 @@ class DynamicFilter {
 
   // The steps of process(), in order (thesis Figure 3.3).
   ScanCheck check(const LaserScan& scan, const std::optional<Pose2>& sensor_pose);
-  void place_beams(const LaserScan& scan, const Pose2& sensor_pose);
+  void place_beams(const LaserScan& scan, const Pose2& sensor_pose, bool registered);
   void observe(const Segmentation& segmentation, const Pose2& sensor_pose, float range_max_m);
   void explain(const LaserScan& scan, const Segmentation& segmentation);
   static double moved_since_marked(const Track& track, const Observation& obs);

@@ -104,8 +104,10 @@ class FreeSpaceMap {
 
   /// Adds a scan taken from @p sensor_pose: cells along each valid beam, up to margin_m before its
   /// return, are seen free, as are cells along a beam with no return, all up to free_range_m;
-  /// then every return's cell is hit (a hit in the same scan wins over a beam passing by).
-  void add_scan(const LaserScan& scan, const Pose2& sensor_pose);
+  /// then every return's cell is hit (a hit in the same scan wins over a beam passing by). Beam b
+  /// is turned by b x @p turn_per_beam_rad: the sensor's turn while it swept the scan, by which
+  /// the registration de-skewed it.
+  void add_scan(const LaserScan& scan, const Pose2& sensor_pose, double turn_per_beam_rad = 0.0);
 
   /// Forgets everything (O(1): the tiles are marked of an earlier generation).
   void clear();

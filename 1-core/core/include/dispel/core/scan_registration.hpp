@@ -184,6 +184,9 @@ class ScanRegistration {
 
   /// The last registered scan's beams in the fixed frame (NaN where invalid).
   const std::vector<Eigen::Vector2d>& points() const { return world_points_; }
+  /// The turn of the sensor from one beam of the last registered scan to the next that its
+  /// points were de-skewed by (0: not de-skewed, or not turned).
+  double deskew_turn_per_beam_rad() const { return deskew_turn_per_beam_rad_; }
 
   /// Whether the map explains beam @p b of the last registered scan (see RegistrationConfig).
   /// Valid after register_scan() and before add().
@@ -313,6 +316,7 @@ class ScanRegistration {
   double last_stamp_s_ = 0.0;
   Pose2 last_pose_;
   // Per scan.
+  double deskew_turn_per_beam_rad_ = 0.0;
   std::vector<Eigen::Vector2d> local_points_;  // Per beam, de-skewed, in the sensor frame.
   std::vector<Eigen::Vector2d> world_points_;  // Per beam, in the fixed frame.
   BeamDirections directions_;                  // The scanner's beam directions.

@@ -228,22 +228,11 @@ void FreeSpaceMap::add_scan(const LaserScan& scan, const Pose2& sensor_pose,
   const std::vector<Eigen::Vector2d>& unit = beam_directions_.of(scan);
   const PoseTransform to_fixed(sensor_pose);
   directions_.resize(scan.size());
-  if (turn_per_beam_rad == 0.0) {
-    for (std::size_t b = 0; b < scan.size(); ++b) directions_[b] = to_fixed.rotate(unit[b]);
-  } else {
-    // Beam b turned by b steps: the rotation by recurrence (one sine and cosine per scan).
-    const double cs = std::cos(turn_per_beam_rad), ss = std::sin(turn_per_beam_rad);
-    double cb = 1.0, sb = 0.0;
-    for (std::size_t b = 0; b < scan.size(); ++b) {
-      if (b > 0) {
-        const double c_next = cb * cs - sb * ss;
-        sb = sb * cs + cb * ss;
-        cb = c_next;
-      }
-      const Eigen::Vector2d& u = unit[b];
-      directions_[b] =
-          to_fixed.rotate(Eigen::Vector2d(cb * u.x() - sb * u.y(), sb * u.x() + cb * u.y()));
-    }
+  // Beam b turned by b steps of the sensor's turn during the sweep.
+  SteppedRotation turn(turn_per_beam_rad);
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    if (b > 0) turn.advance();
+    directions_[b] = to_fixed.rotate(turn.rotate(unit[b]));
   }
   const int cap = config_.min_free_observations + config_.max_recent_hits;
   const auto free_s = static_cast<float>(scan.stamp_s - epoch_s_);

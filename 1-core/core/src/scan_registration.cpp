@@ -267,21 +267,15 @@ bool ScanRegistration::thin_and_deskew(const LaserScan& scan, const Pose2& motio
   // recurrence (one sine and cosine per scan), its translation to first order in time.
   const double step_yaw = motion_per_s.yaw_rad * ti;
   deskew_turn_per_beam_rad_ = deskew ? step_yaw : 0.0;
-  const double cs = std::cos(step_yaw), ss = std::sin(step_yaw);
-  double c = 1.0, s = 0.0;
+  SteppedRotation turn(step_yaw);
   for (std::size_t b = 0; b < n; ++b) {
-    if (b > 0 && deskew) {
-      const double c_next = c * cs - s * ss;
-      s = s * cs + c * ss;
-      c = c_next;
-    }
+    if (b > 0 && deskew) turn.advance();
     if (!scan.is_valid(b)) continue;
     const double r = scan.ranges_m[b];
     Eigen::Vector2d p = r * unit[b];
     if (deskew) {
       const double t = ti * static_cast<double>(b);
-      p = Eigen::Vector2d(c * p.x() - s * p.y() + motion_per_s.x_m * t,
-                          s * p.x() + c * p.y() + motion_per_s.y_m * t);
+      p = turn.rotate(p) + t * Eigen::Vector2d(motion_per_s.x_m, motion_per_s.y_m);
     }
     local_points_[b] = p;
   }

@@ -66,4 +66,27 @@ class PoseTransform {
   double c_, s_, x_, y_;
 };
 
+/// The rotations by 0, step, 2 x step, ... in turn, by recurrence: one sine and cosine in all
+/// (a scan's beams, each turned by the sensor's turn up to its own time). A zero step gives the
+/// identity exactly at every step.
+class SteppedRotation {
+ public:
+  explicit SteppedRotation(double step_rad) : cs_(std::cos(step_rad)), ss_(std::sin(step_rad)) {}
+
+  /// On to the next multiple of the step.
+  void advance() {
+    const double c_next = c_ * cs_ - s_ * ss_;
+    s_ = s_ * cs_ + c_ * ss_;
+    c_ = c_next;
+  }
+  /// @p v turned by the current multiple of the step.
+  Eigen::Vector2d rotate(const Eigen::Vector2d& v) const {
+    return {c_ * v.x() - s_ * v.y(), s_ * v.x() + c_ * v.y()};
+  }
+
+ private:
+  double cs_, ss_;
+  double c_ = 1.0, s_ = 0.0;
+};
+
 }  // namespace dispel

@@ -406,6 +406,9 @@ EdgeNeighbour Segmenter::neighbour_of(const LaserScan& scan, std::int32_t beam, 
   return scan.ranges_m[j] < scan.ranges_m[beam] ? EdgeNeighbour::kCloser : EdgeNeighbour::kFarther;
 }
 
+// segmentation.min_width_m lowers N_min only within this share of the scanner's range_max.
+constexpr double kMinWidthRangeShare = 0.8;
+
 std::int32_t Segmenter::min_points_of(const LaserScan& scan, const Object& obj,
                                       const SeenBefore& seen_before) const {
   const std::int32_t n_min = config_.min_points;
@@ -415,6 +418,10 @@ std::int32_t Segmenter::min_points_of(const LaserScan& scan, const Object& obj,
       std::hypot(obj.sum_x, obj.sum_y) / static_cast<double>(std::max<std::int32_t>(obj.count, 1));
   const double covered = config_.min_width_m / (range * cached_increment_rad_);
   if (!(covered < static_cast<double>(n_min))) return n_min;  // Also a range of 0 (inf, NaN).
+  // Not near the end of the scanner's reach, where returns are weak and come and go:
+  // person_following_outdoor_1's 5.6 m scanner returns runs of 1-4 beams at 4-5.6 m among beams
+  // that return nothing, in the same places scan after scan (so "seen before" below admits them).
+  if (!(range <= kMinWidthRangeShare * static_cast<double>(scan.range_max_m))) return n_min;
   // Only a thing that stands out whole in front of what is beside it (a leg against the far
   // wall or against nothing): a piece of a wall seen at a slant, or a thing cut by the view's
   // end or by something nearer, is no object below min_points. Nor is one beside a beam that

@@ -284,6 +284,27 @@ TEST(Segmentation, ALegAtRangeIsAnObjectWhenNminFallsWithItsWidth) {
   EXPECT_EQ(Segmenter{config}.segment(cable).objects.size(), 1U);  // The wall alone.
 }
 
+// Near the end of a scanner's reach a few beams that return may be its noise, not a thing: N_min
+// falls with width only within 0.8 of range_max (person_following_outdoor_1's 5.6 m scanner
+// returns runs of 1-4 beams at 4-5.6 m among beams that return nothing, in the same places scan
+// after scan).
+TEST(Segmentation, NminFallsWithWidthOnlyWithinFourFifthsOfTheScannersReach) {
+  World world;
+  world.circles = {{{7.0, 0.0}, 0.06}};  // A leg at 7 m against nothing: 2-3 beams.
+  LaserScan scan = cast(world, scanner_768());
+  SegmentationConfig config;
+  config.min_points = 4;
+  config.min_width_m = 0.1;
+  scan.range_max_m = 8.0F;  // The leg at 0.87 of the reach: noise.
+  const Segmentation near_the_end = Segmenter{config}.segment(scan);
+  expect_consistent(scan, near_the_end, config);
+  EXPECT_EQ(object_near(near_the_end, {6.95, 0.0}, 0.1), nullptr);
+  scan.range_max_m = 9.0F;  // At 0.78 of it: an object.
+  const Segmentation within = Segmenter{config}.segment(scan);
+  expect_consistent(scan, within, config);
+  EXPECT_NE(object_near(within, {6.95, 0.0}, 0.1), nullptr);
+}
+
 // N_min 4, falling with range to the beams a thing 0.1 m wide covers; @p scan segmented with it.
 Segmentation segment_by_width(const LaserScan& scan) {
   SegmentationConfig config;

@@ -333,7 +333,8 @@ TEST(SimPipeline, ALaserOnlyRobotFollowingAWalkerKeepsItsBackground) {
 // speckle, kept everything either way. With the recording's speckle the scenario showed the loss
 // (seed 1, with the wheel odometry: 0.9989 kept by the default, 0.9080 with the option). A thing
 // below min_points is now an object only where the two scans before it had a return within
-// 0.3 m (a walker's legs; not a sporadic return): measured 0.9975 with the option.
+// 0.3 m (a walker's legs; not a sporadic return): measured 0.9975 with the option. (Since
+// December 7 N_min falls only within 0.8 of range_max, short of most of the speckle.)
 TEST(SimPipeline, SpeckleOutdoorsIsNotTakenForFarLegs) {
   const FilteredScenario outdoors = simulate_and_filter(
       "person_following", {[](DynamicFilterConfig& c) { c.segmentation.min_width_m = 0.1; }}, 1,
@@ -423,7 +424,8 @@ TEST(SimPipeline, AnOpenClutteredHallKeepsItsClutterAndFarWalkersNeedNminByWidth
     std::remove(o.output.c_str());
   }
   EXPECT_LT(removed[0], 0.75);  // Measured 0.62 (0.36 before dynamic tracks followed fragments).
-  EXPECT_GE(removed[1], 0.85);  // Measured 0.95 (0.92 before).
+  // Measured 0.874 (0.924 before N_min fell only within 0.8 of range_max: walkers at 8.8-11 m).
+  EXPECT_GE(removed[1], 0.85);
   EXPECT_GT(removed[1] - removed[0], 0.15);
   std::remove(bag.c_str());
 }

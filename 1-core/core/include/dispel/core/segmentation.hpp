@@ -48,9 +48,10 @@ struct SegmentationConfig {
   /// than min_points beams (farther than min_width_m / (min_points x angle increment), 4 m for
   /// 0.1 m at 0.35 degrees and N_min 4), N_min falls to the beams it covers at the object's range,
   /// rounded, never below 2 (a single beam stays noise), for an object that stands out whole in
-  /// front of what is beside it (both neighbouring beams farther or without a return). A leg at
-  /// 6 m is 3 beams of a 0.35-degree scanner. 0 (the default and the thesis): N_min is min_points
-  /// at every range. docs/dynamic_filter.md says what 0.1 gains and costs.
+  /// front of what is beside it (both neighbouring beams farther or without a return) and lies
+  /// within 0.8 of the scanner's range_max (near the end of its reach returns come and go). A leg
+  /// at 6 m is 3 beams of a 0.35-degree scanner. 0 (the default and the thesis): N_min is
+  /// min_points at every range. docs/dynamic_filter.md says what 0.1 gains and costs.
   double min_width_m = 0.0;
   /// How the gap between neighbouring beams is measured.
   GapMetric gap_metric = GapMetric::kEuclidean;

@@ -54,6 +54,19 @@ double flicker_draw(std::uint64_t seed, std::size_t circle, double bearing_rad) 
   return static_cast<double>(z >> 11) * 0x1.0p-53;
 }
 
+// Whether a beam along @p direction that reaches @p segment returns from it (Segment::
+// returns_within_rad): the cosine of its angle with the segment's normal at least that of the
+// limit.
+bool returns_at(const Segment& segment, const Eigen::Vector2d& direction) {
+  if (!(segment.returns_within_rad < 0.5 * kPi)) return true;
+  const Eigen::Vector2d along = segment.b - segment.a;
+  const double length = along.norm();
+  if (!(length > 0.0)) return false;
+  const double cos_incidence =
+      std::abs(direction.x() * along.y() - direction.y() * along.x()) / length;
+  return cos_incidence >= std::cos(segment.returns_within_rad);
+}
+
 }  // namespace
 
 LaserScan raycast(const World& world, const Pose2& sensor_pose, const ScanGeometry& geometry,
@@ -74,8 +87,9 @@ LaserScan raycast(const World& world, const Pose2& sensor_pose, const ScanGeomet
     double best = kInf;
     std::int32_t best_id = kNoHit;
     for (std::int32_t s = 0; s < segment_count; ++s) {
-      const double t = ray_distance(world.segments[s], origin, direction);
-      if (t < best) {
+      const Segment& segment = world.segments[s];
+      const double t = ray_distance(segment, origin, direction);
+      if (t < best && returns_at(segment, direction)) {
         best = t;
         best_id = s;
       }

@@ -91,6 +91,27 @@ TEST(Raycast, AThingThatReturnsSomeBeamsLetsTheOthersThroughDifferentlyInEachSca
   EXPECT_EQ(hit[200], 1);
 }
 
+// Glass (Segment::returns_within_rad): a beam that meets the pane nearly square returns from it,
+// the others pass through to what lies behind, as real glass and polished panels do.
+TEST(Raycast, GlassReturnsOnlyTheBeamsThatMeetItNearlySquare) {
+  World world;
+  world.segments = {{{2.0, -5.0}, {2.0, 5.0}, 5.0 * kPi / 180.0},  // Glass 2 m ahead,
+                    {{6.0, -20.0}, {6.0, 20.0}}};                  // a wall behind it.
+  // Beams at 0, 4 and 8 degrees.
+  const ScanGeometry g{0.0, 4.0 * kPi / 180.0, 3, 0.1F, 30.0F};
+  std::vector<std::int32_t> hit;
+  const LaserScan scan = raycast(world, Pose2{0.0, 0.0, 0.0}, g, &hit);
+  EXPECT_EQ(hit[0], 0);
+  EXPECT_NEAR(scan.ranges_m[0], 2.0F, 1e-5);
+  EXPECT_EQ(hit[1], 0);  // 4 degrees from its normal: within 5.
+  EXPECT_EQ(hit[2], 1);  // 8 degrees: through the glass to the wall.
+  EXPECT_NEAR(scan.ranges_m[2], 6.0 / std::cos(8.0 * kPi / 180.0), 1e-4);
+  // From beside the pane's normal the same beam directions all pass through.
+  const LaserScan beside = raycast(world, Pose2{0.0, 0.0, 0.3}, g, &hit);
+  for (std::int32_t h : hit) EXPECT_EQ(h, 1);
+  EXPECT_EQ(beside.size(), 3U);
+}
+
 TEST(Raycast, HitsBeyondRangeMaxAreNoReturn) {
   World world;
   world.segments = {{{20.0, -1.0}, {20.0, 1.0}}};

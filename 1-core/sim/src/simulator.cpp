@@ -219,7 +219,13 @@ void add_rough_wall(const Segment& wall, const RoughWalls& rw, const std::vector
       previous_offset = 0.0;
       previous_solid = true;
     } else if (u01(rng) < rw.glass_share) {
-      previous_solid = false;  // Glass: the scanner sees through it and gets nothing back.
+      // Glass: the scanner sees through it and gets nothing back, or (glass_returns_within_deg)
+      // only the beams that meet it nearly square.
+      if (rw.glass_returns_within_deg > 0.0) {
+        out.segments.push_back(
+            {at(s, 0.0), at(s + piece, 0.0), rw.glass_returns_within_deg * kPi / 180.0});
+      }
+      previous_solid = false;
     } else {
       const double offset = (2.0 * u01(rng) - 1.0) * rw.amplitude_m;
       if (previous_solid && std::abs(offset - previous_offset) > 1e-9)
@@ -407,6 +413,9 @@ void Scenario::validate() const {
       reject("world.rough_walls.legs_per_10m", w.legs_per_10m, "in [0, 20]");
     if (!(w.glass_share >= 0.0 && w.glass_share < 1.0))
       reject("world.rough_walls.glass_share", w.glass_share, "in [0, 1)");
+    if (!(w.glass_returns_within_deg >= 0.0 && w.glass_returns_within_deg < 90.0))
+      reject("world.rough_walls.glass_returns_within_deg", w.glass_returns_within_deg,
+             "in [0, 90)");
     if (!(w.low_things_per_10m >= 0.0 && w.low_things_per_10m <= 20.0))
       reject("world.rough_walls.low_things_per_10m", w.low_things_per_10m, "in [0, 20]");
     // A pair [min, max]: the value named is min when it is the one out of bounds, else max.

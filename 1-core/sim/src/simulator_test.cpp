@@ -647,6 +647,8 @@ TEST(Scenario, BadValuesAreRejectedByName) {
   const std::tuple<double RoughWalls::*, double, const char*> rough_cases[] = {
       {&RoughWalls::piece_min_m, 0.0, "world.rough_walls.piece_min_m"},
       {&RoughWalls::glass_share, std::nan(""), "world.rough_walls.glass_share"},
+      {&RoughWalls::glass_returns_within_deg, 90.0, "world.rough_walls.glass_returns_within_deg"},
+      {&RoughWalls::glass_returns_within_deg, -1.0, "world.rough_walls.glass_returns_within_deg"},
       {&RoughWalls::low_things_per_10m, -1.0, "world.rough_walls.low_things_per_10m"},
       {&RoughWalls::low_things_min_radius_m, 0.0, "world.rough_walls.low_things_radius_m"},
       // Below the minimum, 0.075.

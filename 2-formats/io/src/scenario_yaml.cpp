@@ -110,10 +110,10 @@ void read_world(const Reader& r, const YAML::Node& n, sim::StaticWorld& w) {
   }
   if (n["rough_walls"]) {
     const YAML::Node& e = n["rough_walls"];
-    r.keys(
-        e, "world.rough_walls",
-        {"amplitude_m", "piece_min_m", "piece_max_m", "doors_per_10m", "legs_per_10m",
-         "glass_share", "low_things_per_10m", "low_things_radius_m", "low_things_seen_within_m"});
+    r.keys(e, "world.rough_walls",
+           {"amplitude_m", "piece_min_m", "piece_max_m", "doors_per_10m", "legs_per_10m",
+            "glass_share", "glass_returns_within_deg", "low_things_per_10m", "low_things_radius_m",
+            "low_things_seen_within_m"});
     sim::RoughWalls rw;
     read_pair(r, e, "low_things_radius_m", "world.rough_walls", &rw.low_things_min_radius_m,
               &rw.low_things_max_radius_m, 2);
@@ -126,6 +126,7 @@ void read_world(const Reader& r, const YAML::Node& n, sim::StaticWorld& w) {
         {"doors_per_10m", &rw.doors_per_10m},
         {"legs_per_10m", &rw.legs_per_10m},
         {"glass_share", &rw.glass_share},
+        {"glass_returns_within_deg", &rw.glass_returns_within_deg},
         {"low_things_per_10m", &rw.low_things_per_10m}};
     for (const auto& [key, field] : fields) {
       if (e[key]) *field = r.number(e[key], std::string("world.rough_walls.") + key);

@@ -98,6 +98,12 @@ TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
                "world.rough_walls.low_things_radius_m must be a list of 2 numbers");
   expect_error("world: {rough_walls: {low_things_seen_within_m: [3, 2]}}",
                "world.rough_walls.low_things_seen_within_m must be");
+  expect_error("world: {rough_walls: {glass_returns_within_deg: 90}}",
+               "world.rough_walls.glass_returns_within_deg must be");
+  const sim::Scenario glass = parse_scenario(
+      "world: {rough_walls: {glass_share: 0.2, glass_returns_within_deg: 5}}", "s.yaml");
+  ASSERT_TRUE(glass.world.rough_walls.has_value());
+  EXPECT_EQ(glass.world.rough_walls->glass_returns_within_deg, 5.0);
   // Issue 16: NaN and infinite walls and noise were accepted.
   expect_error("world: {walls: [[0, 0, .nan, 1]]}",
                "world.walls[0][2] must be a finite number, got '.nan'");

@@ -17,6 +17,10 @@ namespace dispel::sim {
 struct Segment {
   Eigen::Vector2d a = Eigen::Vector2d::Zero();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  /// Glass or a polished panel: only a beam that meets it within this angle (radians) of its
+  /// normal returns from it, as a reflection straight back; every other beam passes through, as
+  /// if it were not there. Infinity (the default): every beam returns.
+  double returns_within_rad = std::numeric_limits<double>::infinity();
 };
 
 /// A pillar, a leg, a barrel: world frame, metres.

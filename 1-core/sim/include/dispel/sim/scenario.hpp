@@ -32,7 +32,11 @@ struct RoughWalls {
   double piece_max_m = 2.0;
   double doors_per_10m = 1.0;  ///< 0.9 m gaps with a 0.25 m deep recess.
   double legs_per_10m = 2.0;   ///< Pairs of furniture legs (2.5 cm radius) 0.15-0.6 m off the wall.
-  double glass_share = 0.1;    ///< Share of pieces that return nothing.
+  double glass_share = 0.1;    ///< Share of pieces that are glass.
+  /// 0: glass returns nothing. > 0: a glass piece returns the beams that meet it within this many
+  /// degrees of its normal (a reflection straight back, as real glass and polished panels give)
+  /// and lets the others through.
+  double glass_returns_within_deg = 0.0;
   /// Low things (chair seats, boxes: by default 0.15-0.3 m across, 0.05-0.35 m off the wall) that a
   /// scan plane tilted up hits only from within a range (by default 0.8-2 m, drawn per thing); from
   /// farther the beams pass over them and see the wall behind. Real scan planes are not level: on a

@@ -186,6 +186,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
     return;
   }
   const bool registering = config_.registration.enabled;
+  laser_only_ = registering && !sensor_pose;
   out.registration = RegistrationReport{};
   const auto registration_start = std::chrono::steady_clock::now();
   // What moves, for a laser-only registration (registration.leave_out_moving): the points near a
@@ -787,6 +788,7 @@ void DynamicFilter::start_tracks(double stamp_s) {
       track.marked_edges_trusted = from.marked_edges_trusted;
       track.marked_s = from.marked_s;
       track.age_scans = from.age_scans;
+      track.born_s = from.born_s;
       for (PointVelocityFilter& kf : track.kf) kf.set_velocity(from.kf[kCentroid].velocity());
       track.speed_mps = from.speed_mps;
     }
@@ -805,6 +807,7 @@ DynamicFilter::Track DynamicFilter::new_track(const Observation& obs, double sta
   }
   t.cls = initial_class_state(config_.classification);
   t.last_seen_s = stamp_s;
+  t.born_s = stamp_s;
   t.age_scans = 1;
   t.missed_scans = 0;
   t.point_count = obs.point_count;
@@ -819,6 +822,8 @@ DynamicFilter::Track DynamicFilter::new_track(const Observation& obs, double sta
 
 // An object most of whose points stand where beams passed freely before (and not as far as the
 // map knows, hit since) has moved there: it is dynamic at once, unless it is too large to be.
+// With free_space.require_unseen (laser-only by default), a point counts only where the map saw
+// nothing before the object's track began: a place that returned before returns now and then.
 void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan,
                                                const Segmentation& segmentation) {
   const std::size_t n = segmentation.objects.size();
@@ -845,6 +850,12 @@ void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan,
   spacing_limit_.resize(n);
   points_needed_.resize(n);
   points_in_free_.assign(n, 0);
+  points_seen_before_.assign(n, 0);
+  // free_space.require_unseen: a point the map saw there before its track began does not count.
+  const RequireUnseen unseen = config_.free_space.require_unseen;
+  const bool require_unseen =
+      config_.registration.enabled &&
+      (unseen == RequireUnseen::kAlways || (unseen == RequireUnseen::kLaserOnly && laser_only_));
   for (std::size_t i = 0; i < n; ++i) {
     const ScanObject& o = segmentation.objects[i];
     spacing_limit_[i] = 0.5 * (o.last_point_m - o.first_point_m).norm();
@@ -860,10 +871,21 @@ void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan,
         static_cast<double>(points_in_free_[i]) >= points_needed_[i]) {
       continue;
     }
-    if (free_space_.known_free(beam_points_[b], spacing_limit_[i])) ++points_in_free_[i];
+    if (!free_space_.known_free(beam_points_[b], spacing_limit_[i])) continue;
+    if (require_unseen && registration_.seen_before(
+                              b, tracks_[static_cast<std::size_t>(track_of_object_[i])].born_s)) {
+      ++points_seen_before_[i];
+    } else {
+      ++points_in_free_[i];
+    }
   }
   for (std::size_t i = 0; i < n; ++i) {
-    if (!(static_cast<double>(points_in_free_[i]) >= points_needed_[i])) continue;
+    if (!(static_cast<double>(points_in_free_[i]) >= points_needed_[i])) {
+      if (static_cast<double>(points_in_free_[i] + points_seen_before_[i]) >= points_needed_[i]) {
+        ++counters_.free_space_seen_before;
+      }
+      continue;
+    }
     Track& t = tracks_[static_cast<std::size_t>(track_of_object_[i])];
     t.free_space_pending = true;
     t.marked_beside = t.age_scans > kFreeSpaceMaxAge;

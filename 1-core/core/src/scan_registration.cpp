@@ -231,6 +231,28 @@ bool ScanRegistration::explained(std::size_t b) const {
   return false;
 }
 
+bool ScanRegistration::seen_before(std::size_t b, double before_s) const {
+  if (b >= world_points_.size()) return false;
+  const Eigen::Vector2d& p = world_points_[b];
+  if (!std::isfinite(p.x())) return false;
+  const auto ix = floor_index(p.x() / config_.voxel_size_m);
+  const auto iy = floor_index(p.y() / config_.voxel_size_m);
+  const double limit2 = config_.explained_distance_m * config_.explained_distance_m;
+  for (std::int64_t x = ix - 1; x <= ix + 1; ++x) {
+    for (std::int64_t y = iy - 1; y <= iy + 1; ++y) {
+      const Voxel* v = map_.find(key_at(x, y));
+      if (v == nullptr) continue;
+      for (std::uint8_t i = 0; i < v->count; ++i) {
+        if (v->stamps_s[i] < before_s &&
+            (v->points[i].cast<double>() - p).squaredNorm() <= limit2) {
+          return true;
+        }
+      }
+    }
+  }
+  return false;
+}
+
 namespace {
 
 // The normal (unit, either sign) of the line through @p count points given their sum and the sum

@@ -188,6 +188,10 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   b.integer("free_space.neighbourhood_cells", f.neighbourhood_cells);
   b.number("free_space.min_object_share", f.min_object_share);
   b.boolean("free_space.mark_beside_dynamic", f.mark_beside_dynamic);
+  b.choice<RequireUnseen>("free_space.require_unseen", f.require_unseen,
+                          {{"never", RequireUnseen::kNever},
+                           {"laser_only", RequireUnseen::kLaserOnly},
+                           {"always", RequireUnseen::kAlways}});
   RegistrationConfig& g = c.registration;
   b.section("registration");
   b.boolean("registration.enabled", g.enabled);

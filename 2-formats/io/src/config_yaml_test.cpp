@@ -73,6 +73,7 @@ void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d
   EXPECT_EQ(loaded.free_space.neighbourhood_cells, d.free_space.neighbourhood_cells);
   EXPECT_EQ(loaded.free_space.min_object_share, d.free_space.min_object_share);
   EXPECT_EQ(loaded.free_space.mark_beside_dynamic, d.free_space.mark_beside_dynamic);
+  EXPECT_EQ(loaded.free_space.require_unseen, d.free_space.require_unseen);
   EXPECT_EQ(loaded.registration.deskew, d.registration.deskew);
   EXPECT_EQ(loaded.registration.deskew_laser_only_turn, d.registration.deskew_laser_only_turn);
   EXPECT_EQ(loaded.registration.align, d.registration.align);
@@ -151,6 +152,7 @@ TEST(ConfigYaml, ValuesAreReadIntoTheirFields) {
       " masked_sectors: [[-0.5, -0.1], [0.1, 0.5]]}\n"
       "tracking: {matching: nearest_neighbour}\n"
       "classification: {presumption: guilt, static_weight_limit: 20}\n"
+      "free_space: {require_unseen: always}\n"
       "max_pose_jump_m: 2.0\n",
       "test.yaml");
   EXPECT_EQ(c.segmentation.cluster_gap_m, 0.2);
@@ -161,6 +163,7 @@ TEST(ConfigYaml, ValuesAreReadIntoTheirFields) {
   EXPECT_EQ(c.tracking.matching, Matching::kNearestNeighbour);
   EXPECT_EQ(c.classification.presumption, Presumption::kGuilt);
   EXPECT_EQ(c.classification.static_weight_limit, 20);
+  EXPECT_EQ(c.free_space.require_unseen, RequireUnseen::kAlways);
   EXPECT_EQ(c.max_pose_jump_m, 2.0);
   EXPECT_EQ(c.segmentation.min_points, 8);  // Untouched keys keep their defaults.
   EXPECT_EQ(c.tracking.max_missed_scans, DynamicFilterConfig{}.tracking.max_missed_scans);
@@ -178,6 +181,8 @@ TEST(ConfigYaml, UnknownKeysWrongTypesAndBadValuesAreErrorsNamingTheKey) {
   expect_error("segmentation: {min_width_m: -0.1}", "segmentation.min_width_m must be");
   expect_error("tracking: {matching: psychic}", "tracking.matching must be one of");
   expect_error("classification: {presumption: [1]}", "classification.presumption must be");
+  expect_error("free_space: {require_unseen: sometimes}",
+               "free_space.require_unseen must be one of");
   expect_error("velocity: {velocity_decay: 2}", "velocity.velocity_decay must be in [0, 1]");
   expect_error("segmentation: {masked_sectors: [[1]]}", "segmentation.masked_sectors[0]");
   expect_error("segmentation: {masked_sectors: [[0.5, 0.1]]}", "masked_sectors[0] must satisfy");

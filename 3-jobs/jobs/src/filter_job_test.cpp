@@ -189,9 +189,9 @@ std::string write_sim_bag(const std::string& name, const SimBagOptions& opt) {
 // negative_2.bag (angusleigh/leg_tracker, BSD): a robot driving through a building with three
 // 768-beam lasers, no odometry and no people: every beam removed is a false removal. Each laser
 // is filtered laser-only (the recording has no odometry topic: the job says so), every scan
-// registers to the map of the earlier ones, and at most 0.6 % of the valid beams are removed.
+// registers to the map of the earlier ones, and at most 0.16 % of the valid beams are removed.
 // (Measured 0.10-0.29 % on December 2, 0.22-0.71 % before the free-space verdict was weighed
-// again; the target is 0.2 %, not reached on the left laser: docs/results.md.)
+// again; the target is 0.2 %: docs/results.md.)
 TEST(FilterJobLaserOnly, RealRobotWithoutOdometryOrPeopleKeepsItsWalls) {
   for (const std::string laser : {"/left_scan", "/right_scan", "/rear_scan"}) {
     FilterJobOptions o;
@@ -221,10 +221,13 @@ TEST(FilterJobLaserOnly, RealRobotWithoutOdometryOrPeopleKeepsItsWalls) {
       }
     }
     EXPECT_GT(valid, 200000) << laser;
-    // No people: every removed beam is a false removal. The target: at most 0.2 % per laser
-    // (left 0.18 %, right 0.15 %, rear 0.10 % today; docs/results.md).
-    EXPECT_LE(static_cast<double>(removed), 0.002 * static_cast<double>(valid))
+    // No people: every removed beam is a false removal. The target: at most 0.2 % per laser.
+    // 0.14 / 0.08 / 0.04 % today; 0.19 / 0.13 / 0.05 % before free_space.require_unseen, whose
+    // places that returned before are no free-space evidence without odometry (it turned away
+    // objects on every laser); docs/results.md.
+    EXPECT_LE(static_cast<double>(removed), 0.0016 * static_cast<double>(valid))
         << laser << ": " << removed << " of " << valid << " valid beams removed";
+    EXPECT_GT(stats.counters.free_space_seen_before, 0) << laser;
     std::remove(o.output.c_str());
   }
 }

@@ -65,6 +65,9 @@ struct FilterCounters {
   /// Tracks made dynamic by free space that had not moved like a walker 0.4 s later (static
   /// again; docs/dynamic_filter.md, "Per scan", free space).
   std::int64_t free_space_refuted = 0;
+  /// Objects free space would have marked but for points the map had seen there before
+  /// (free_space.require_unseen).
+  std::int64_t free_space_seen_before = 0;
   /// Dynamic tracks static again after standing still alone for
   /// classification.still_alone_to_static_s.
   std::int64_t still_alone_to_static = 0;
@@ -229,6 +232,7 @@ class DynamicFilter {
     std::array<bool, 3> trusted;  // Whether each point was measured reliably in the last scan.
     ClassState cls;
     double last_seen_s;
+    double born_s;  // When it (or the track it split from) was first seen.
     std::int32_t age_scans;
     std::int32_t missed_scans;
     std::int32_t point_count;
@@ -348,11 +352,13 @@ class DynamicFilter {
   std::vector<RecurringRange> body_;
   std::vector<float> previous_ranges_;  // The last scan follow_fragments() saw (learned scans).
   std::vector<char> attached_;  // Scratch: per object of this scan, judged part of the robot.
-  std::vector<double> spacing_limit_;         // Scratch: per object, for free-space evidence,
-  std::vector<double> points_needed_;         // the points in free space that would mark it,
-  std::vector<std::int32_t> points_in_free_;  // and those found.
-  std::vector<char> keep_;                    // Scratch: beams the map learns.
-  std::vector<std::size_t> edge_pixels_;      // Scratch: remove_edge_pixels().
+  std::vector<double> spacing_limit_;             // Scratch: per object, for free-space evidence,
+  std::vector<double> points_needed_;             // the points in free space that would mark it,
+  std::vector<std::int32_t> points_in_free_;      // and those found,
+  std::vector<std::int32_t> points_seen_before_;  // and those the map saw there before.
+  bool laser_only_ = false;  // The scan being processed has no odometry (registered alone).
+  std::vector<char> keep_;   // Scratch: beams the map learns.
+  std::vector<std::size_t> edge_pixels_;  // Scratch: remove_edge_pixels().
   struct PredictedOutline {  // A track's outline (edge to edge), predicted dt after it was seen.
     PredictedOutline(const PointVelocityFilter& first, const PointVelocityFilter& last, double dt);
     double distance(const Eigen::Vector2d& p) const;

@@ -191,6 +191,10 @@ class ScanRegistration {
   /// Whether the map explains beam @p b of the last registered scan (see RegistrationConfig).
   /// Valid after register_scan() and before add().
   bool explained(std::size_t b) const;
+  /// Whether the map holds a point within explained_distance_m of beam @p b of the last
+  /// registered scan that it learnt before @p before_s (structure or not, seen lately or not:
+  /// FreeSpaceConfig::require_unseen). Valid after register_scan() and before add().
+  bool seen_before(std::size_t b, double before_s) const;
 
   /// Adds the beams of the last registered scan for which @p keep is true to the map, and forgets
   /// voxels beyond local_map_radius_m. @p in_free_space (may be empty: never) says whether a

@@ -183,6 +183,17 @@ inline ScanRegistration::Key ScanRegistration::key_of(const Eigen::Vector2d& p) 
                 floor_index(p.y() / config_.voxel_size_m));
 }
 
+template <typename F>
+bool ScanRegistration::any_voxel_around(std::int64_t ix, std::int64_t iy, F&& f) const {
+  constexpr std::array<std::int8_t, 9> kDx{0, -1, -1, -1, 0, 0, 1, 1, 1};
+  constexpr std::array<std::int8_t, 9> kDy{0, -1, 0, 1, -1, 1, -1, 0, 1};
+  for (std::size_t k = 0; k < kDx.size(); ++k) {
+    const Voxel* v = map_.find(key_at(ix + kDx[k], iy + kDy[k]));
+    if (v != nullptr && f(*v)) return true;
+  }
+  return false;
+}
+
 inline bool ScanRegistration::structure(const Voxel& v) const {
   return v.scans >= config_.explained_min_scans &&
          v.last_stamp_s - v.first_stamp_s >= (v.in_free_space ? config_.explained_min_span_in_free_s
@@ -199,27 +210,20 @@ bool ScanRegistration::explained(std::size_t b) const {
   // (until the next registration or add()).
   if (!explaining_valid_ || ix != explaining_ix_ || iy != explaining_iy_) {
     explaining_.clear();
-    // The point's own voxel first: a beam is mostly explained by a point there (the answer does
-    // not depend on the order, the time to find it does).
-    constexpr std::array<std::int8_t, 9> kDx{0, -1, -1, -1, 0, 0, 1, 1, 1};
-    constexpr std::array<std::int8_t, 9> kDy{0, -1, 0, 1, -1, 1, -1, 0, 1};
-    for (std::size_t k = 0; k < kDx.size(); ++k) {
-      const std::int64_t x = ix + kDx[k], y = iy + kDy[k];
-      const Voxel* v = map_.find(key_at(x, y));
+    any_voxel_around(ix, iy, [&](const Voxel& v) {
       // Structure explains only while it is still seen: someone who stood there and left
       // explains no one who comes by later.
-      if (v == nullptr || !structure(*v) ||
-          last_stamp_s_ - v->last_stamp_s > config_.explained_max_age_s) {
-        continue;
+      if (!structure(v) || last_stamp_s_ - v.last_stamp_s > config_.explained_max_age_s) {
+        return false;
       }
       const double min_age =
-          v->in_free_space ? config_.explained_min_span_in_free_s : config_.explained_min_span_s;
-      for (std::uint8_t i = 0; i < v->count; ++i) {
-        if (last_stamp_s_ - v->stamps_s[i] >= min_age) {
-          explaining_.push_back(v->points[i].cast<double>());
-        }
+          v.in_free_space ? config_.explained_min_span_in_free_s : config_.explained_min_span_s;
+      for (std::uint8_t i = 0; i < v.count; ++i) {
+        if (last_stamp_s_ - v.stamps_s[i] >= min_age)
+          explaining_.push_back(v.points[i].cast<double>());
       }
-    }
+      return false;  // Every voxel around.
+    });
     explaining_valid_ = true;
     explaining_ix_ = ix;
     explaining_iy_ = iy;
@@ -238,19 +242,14 @@ bool ScanRegistration::seen_before(std::size_t b, double before_s) const {
   const auto ix = floor_index(p.x() / config_.voxel_size_m);
   const auto iy = floor_index(p.y() / config_.voxel_size_m);
   const double limit2 = config_.explained_distance_m * config_.explained_distance_m;
-  for (std::int64_t x = ix - 1; x <= ix + 1; ++x) {
-    for (std::int64_t y = iy - 1; y <= iy + 1; ++y) {
-      const Voxel* v = map_.find(key_at(x, y));
-      if (v == nullptr) continue;
-      for (std::uint8_t i = 0; i < v->count; ++i) {
-        if (v->stamps_s[i] < before_s &&
-            (v->points[i].cast<double>() - p).squaredNorm() <= limit2) {
-          return true;
-        }
+  return any_voxel_around(ix, iy, [&](const Voxel& v) {
+    for (std::uint8_t i = 0; i < v.count; ++i) {
+      if (v.stamps_s[i] < before_s && (v.points[i].cast<double>() - p).squaredNorm() <= limit2) {
+        return true;
       }
     }
-  }
-  return false;
+    return false;
+  });
 }
 
 namespace {

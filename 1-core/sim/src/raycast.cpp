@@ -59,12 +59,7 @@ double flicker_draw(std::uint64_t seed, std::size_t circle, double bearing_rad) 
 // limit.
 bool returns_at(const Segment& segment, const Eigen::Vector2d& direction) {
   if (!(segment.returns_within_rad < 0.5 * kPi)) return true;
-  const Eigen::Vector2d along = segment.b - segment.a;
-  const double length = along.norm();
-  if (!(length > 0.0)) return false;
-  const double cos_incidence =
-      std::abs(direction.x() * along.y() - direction.y() * along.x()) / length;
-  return cos_incidence >= std::cos(segment.returns_within_rad);
+  return incidence_cosine(segment, direction) >= std::cos(segment.returns_within_rad);
 }
 
 }  // namespace
@@ -112,6 +107,13 @@ LaserScan raycast(const World& world, const Pose2& sensor_pose, const ScanGeomet
     if (hit_shape != nullptr) (*hit_shape)[i] = best_id;
   }
   return scan;
+}
+
+double incidence_cosine(const Segment& shape, const Eigen::Vector2d& direction) {
+  const Eigen::Vector2d along = shape.b - shape.a;
+  const double length = along.norm();
+  if (!(length > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  return std::abs(direction.x() * along.y() - direction.y() * along.x()) / length;
 }
 
 }  // namespace dispel::sim

@@ -319,15 +319,12 @@ void add_shelf_row(const ShelfRow& row, std::mt19937_64& rng, World& out) {
 double incidence_cosine(const World& world, std::int32_t id, const Eigen::Vector2d& origin,
                         const Eigen::Vector2d& direction, double range) {
   const auto segments = static_cast<std::int32_t>(world.segments.size());
-  Eigen::Vector2d normal;
   if (id < segments) {
-    const Segment& s = world.segments[static_cast<std::size_t>(id)];
-    const Eigen::Vector2d t = s.b - s.a;
-    normal = Eigen::Vector2d(-t.y(), t.x());
-  } else {
-    const Circle& c = world.circles[static_cast<std::size_t>(id - segments)];
-    normal = origin + range * direction - c.center;
+    const double c = incidence_cosine(world.segments[static_cast<std::size_t>(id)], direction);
+    return std::isnan(c) ? 1.0 : std::max(0.1, c);
   }
+  const Circle& c = world.circles[static_cast<std::size_t>(id - segments)];
+  const Eigen::Vector2d normal = origin + range * direction - c.center;
   const double norm = normal.norm();
   if (!(norm > 0.0)) return 1.0;
   return std::max(0.1, std::abs(normal.dot(direction)) / norm);

@@ -254,6 +254,11 @@ class ScanRegistration {
            static_cast<std::uint32_t>(iy);
   }
   Key key_of(const Eigen::Vector2d& p) const;
+  /// Calls @p f on each voxel of the map among voxel (ix, iy) and its eight neighbours, (ix, iy)
+  /// first (where a point is mostly found), until @p f returns true; returns whether it did. The
+  /// map's points within explained_distance_m of a point lie in the voxels around the point's.
+  template <typename F>
+  bool any_voxel_around(std::int64_t ix, std::int64_t iy, F&& f) const;
   bool structure(const Voxel& v) const;
   struct Reference {  // One map point: its voxel, its slot there.
     const Voxel* voxel;

@@ -68,4 +68,8 @@ double ray_distance(const Segment& shape, const Eigen::Vector2d& origin,
 double ray_distance(const Circle& shape, const Eigen::Vector2d& origin,
                     const Eigen::Vector2d& direction);
 
+/// |cos| of the angle between the unit @p direction and @p shape's normal (1: square on); NaN for
+/// a segment of zero length.
+double incidence_cosine(const Segment& shape, const Eigen::Vector2d& direction);
+
 }  // namespace dispel::sim

@@ -105,6 +105,7 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
   j["config"] = {
       {"min_points", s.config.segmentation.min_points},
       {"cluster_gap_m", s.config.segmentation.cluster_gap_m},
+      {"cluster_gap_spacings", s.config.segmentation.cluster_gap_spacings},
       {"min_width_m", s.config.segmentation.min_width_m},
       {"presumption",
        s.config.classification.presumption == Presumption::kGuilt ? "guilt" : "innocence"},

@@ -67,7 +67,8 @@ inline Eigen::Vector2d point_of(const LaserScan& scan, std::int32_t i) {
 }
 
 // What must hold of every segmentation: labels and objects agree, objects respect N_min, the
-// beams of an object are joined by gaps of at most eps (in bearing order, wrapping on full
+// beams of an object are joined by gaps of at most eps or cluster_gap_spacings beam spacings at
+// their range (in bearing order, wrapping on full
 // circles) except where clusters were merged, and edge points are the points of the edge beams.
 inline void expect_consistent(const LaserScan& scan, const Segmentation& seg,
                               const SegmentationConfig& config) {
@@ -118,7 +119,13 @@ inline void expect_consistent(const LaserScan& scan, const Segmentation& seg,
     std::int32_t wide_gaps = 0;
     for (std::size_t j = 1; j < ordered.size(); ++j) {
       const double gap = (point_of(scan, ordered[j]) - point_of(scan, ordered[j - 1])).norm();
-      if (config.gap_metric == GapMetric::kEuclidean && gap > config.cluster_gap_m + 1e-5) {
+      // Within eps, or within cluster_gap_spacings beam spacings at the nearer point's range.
+      const double nearer = std::min(scan.ranges_m[static_cast<std::size_t>(ordered[j])],
+                                     scan.ranges_m[static_cast<std::size_t>(ordered[j - 1])]);
+      const double allowed =
+          std::max(config.cluster_gap_m,
+                   config.cluster_gap_spacings * std::fabs(scan.angle_increment_rad) * nearer);
+      if (config.gap_metric == GapMetric::kEuclidean && gap > allowed + 1e-5) {
         ++wide_gaps;
       }
     }

@@ -53,6 +53,7 @@ void DynamicFilterConfig::validate() const {
 DynamicFilterConfig thesis_config() {
   DynamicFilterConfig c;
   c.segmentation.gap_metric = GapMetric::kRangeDifference;
+  c.segmentation.cluster_gap_spacings = 0.0;
   c.segmentation.min_width_m = 0.0;
   c.tracking.matching = Matching::kNearestNeighbour;
   c.tracking.max_missed_scans = 10;

@@ -33,7 +33,16 @@ struct PassInput {
   const float* unit_y;
   const std::uint8_t* masked;
   float range_min, range_max, gap, gap_sq;
+  float spacing_sq;  // (cluster_gap_spacings x angle increment)^2, see within_gap().
 };
+
+// Whether two points @p dist_sq apart (squared, metres) are of one cluster: within eps, or within
+// cluster_gap_spacings beam spacings at the nearer point's range @p nearer_m (@p spacing_sq is that
+// count times the angle increment, squared). Far away a surface seen at a slant has its points
+// farther apart than eps.
+inline bool within_gap(float dist_sq, float nearer_m, float gap_sq, float spacing_sq) {
+  return dist_sq <= std::max(gap_sq, spacing_sq * nearer_m * nearer_m);
+}
 
 // What the pass carries from one index range to the next (the two halves of a rotated circle).
 struct PassState {
@@ -99,7 +108,8 @@ PassState run_pass(const PassInput& in, std::int32_t begin, std::int32_t end,
     if (kEuclidean) {
       const float dx = x - st.prev_x;
       const float dy = y - st.prev_y;
-      join = join && dx * dx + dy * dy <= gap_sq;
+      join =
+          join && within_gap(dx * dx + dy * dy, std::min(r, st.prev_range), gap_sq, in.spacing_sq);
     } else {
       join = join && std::fabs(r - st.prev_range) <= gap;
     }
@@ -140,6 +150,11 @@ bool sector_contains(const AngleSector& sector, double bearing_rad) {
 void SegmentationConfig::validate() const {
   if (!std::isfinite(cluster_gap_m) || !(cluster_gap_m > 0.0)) {
     reject("segmentation.cluster_gap_m must be a finite number > 0, got " + str(cluster_gap_m));
+  }
+  if (!std::isfinite(cluster_gap_spacings) || cluster_gap_spacings < 0.0 ||
+      cluster_gap_spacings > 20.0) {
+    reject("segmentation.cluster_gap_spacings must be a number in [0, 20], got " +
+           str(cluster_gap_spacings));
   }
   if (min_points < 1) {
     reject("segmentation.min_points must be >= 1, got " + str(min_points));
@@ -208,13 +223,15 @@ std::int32_t Segmenter::find_rotation_start(const LaserScan& scan, bool& seam_co
   const bool euclid = config_.gap_metric == GapMetric::kEuclidean;
   const float gap = static_cast<float>(config_.cluster_gap_m);
   const auto gap_sq = static_cast<float>(cluster_gap_sq_m2_);
+  const float spacing = spacing_sq(scan);
   auto usable = [&](std::int32_t i) { return masked_[i] == 0 && scan.is_valid(i); };
   auto joins = [&](std::int32_t a, std::int32_t b) {
     const float ra = scan.ranges_m[a];
     const float rb = scan.ranges_m[b];
     if (!euclid) return std::fabs(ra - rb) <= gap;
-    return square(ra * unit_x_[a] - rb * unit_x_[b]) + square(ra * unit_y_[a] - rb * unit_y_[b]) <=
-           gap_sq;
+    return within_gap(
+        square(ra * unit_x_[a] - rb * unit_x_[b]) + square(ra * unit_y_[a] - rb * unit_y_[b]),
+        std::min(ra, rb), gap_sq, spacing);
   };
   seam_continuous = false;
   std::int32_t last = n - 1;
@@ -238,6 +255,11 @@ std::int32_t Segmenter::find_rotation_start(const LaserScan& scan, bool& seam_co
     prev = i;
   }
   return 0;  // Every valid beam joins its predecessor: one ring; start anywhere.
+}
+
+float Segmenter::spacing_sq(const LaserScan& scan) const {
+  const double per_m = config_.cluster_gap_spacings * std::fabs(scan.angle_increment_rad);
+  return static_cast<float>(per_m * per_m);
 }
 
 void Segmenter::segment(const LaserScan& scan, Segmentation& out) { segment(scan, out, {}); }
@@ -267,7 +289,8 @@ void Segmenter::segment(const LaserScan& scan, Segmentation& out, const SeenBefo
                      scan.range_min_m,
                      scan.range_max_m,
                      static_cast<float>(config_.cluster_gap_m),
-                     static_cast<float>(cluster_gap_sq_m2_)};
+                     static_cast<float>(cluster_gap_sq_m2_),
+                     spacing_sq(scan)};
   auto pass = config_.gap_metric == GapMetric::kEuclidean
                   ? (any_masked_ ? &run_pass<true, true> : &run_pass<true, false>)
                   : (any_masked_ ? &run_pass<false, true> : &run_pass<false, false>);

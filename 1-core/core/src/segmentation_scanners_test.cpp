@@ -124,8 +124,9 @@ TEST(Segmentation, FullCircleWithOneSurroundingWallIsOneRing) {
 
 TEST(Segmentation, RangeDifferenceOverJoinsAnObliqueWallAtRange) {
   // A wall 25 m away seen at 45 degrees incidence: neighbouring points are 10.5 cm apart but their
-  // ranges differ by only 7.4 cm. The exact metric sees a row of separate points (eps is 10 cm);
-  // the thesis's |r1 - r2| sees one wall.
+  // ranges differ by only 7.4 cm. The exact metric with eps alone sees a row of separate points
+  // (eps is 10 cm); the thesis's |r1 - r2| sees one wall, and so does the exact metric with
+  // dispel's default cluster_gap_spacings (3 beam spacings: 22 cm at 25 m).
   World world;
   const Eigen::Vector2d hit(25.0, 0.0);
   const Eigen::Vector2d along = Eigen::Vector2d(1.0, 1.0).normalized();
@@ -144,6 +145,11 @@ TEST(Segmentation, RangeDifferenceOverJoinsAnObliqueWallAtRange) {
   ASSERT_LT(range_step, 0.1);
 
   SegmentationConfig config;
+  const Segmentation within_spacings = Segmenter{config}.segment(scan);
+  expect_consistent(scan, within_spacings, config);
+  ASSERT_EQ(within_spacings.objects.size(), 1u);
+  EXPECT_GT(within_spacings.objects[0].point_count, 20);
+  config.cluster_gap_spacings = 0.0;
   Segmenter exact{config};
   const Segmentation e = exact.segment(scan);
   EXPECT_TRUE(e.objects.empty());

@@ -117,6 +117,7 @@ void bind_filter_config(Binder& b, DynamicFilterConfig& c, const std::string& or
   SegmentationConfig& s = c.segmentation;
   b.section("segmentation");
   b.number("segmentation.cluster_gap_m", s.cluster_gap_m);
+  b.number("segmentation.cluster_gap_spacings", s.cluster_gap_spacings);
   b.integer("segmentation.min_points", s.min_points);
   b.number("segmentation.min_width_m", s.min_width_m);
   b.choice<GapMetric>(

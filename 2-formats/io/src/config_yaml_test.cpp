@@ -25,6 +25,7 @@ void expect_error(const std::string& yaml, const std::string& expected) {
 // Every field of two configurations is equal.
 void expect_same(const DynamicFilterConfig& loaded, const DynamicFilterConfig& d) {
   EXPECT_EQ(loaded.segmentation.cluster_gap_m, d.segmentation.cluster_gap_m);
+  EXPECT_EQ(loaded.segmentation.cluster_gap_spacings, d.segmentation.cluster_gap_spacings);
   EXPECT_EQ(loaded.segmentation.min_points, d.segmentation.min_points);
   EXPECT_EQ(loaded.segmentation.min_width_m, d.segmentation.min_width_m);
   EXPECT_EQ(loaded.segmentation.gap_metric, d.segmentation.gap_metric);
@@ -148,14 +149,15 @@ TEST(ConfigYaml, PresetIsTheStartingPointWhereverItStands) {
 
 TEST(ConfigYaml, ValuesAreReadIntoTheirFields) {
   const DynamicFilterConfig c = parse_filter_config(
-      "segmentation: {cluster_gap_m: 0.2, gap_metric: range_difference, min_width_m: 0.15,"
-      " masked_sectors: [[-0.5, -0.1], [0.1, 0.5]]}\n"
+      "segmentation: {cluster_gap_m: 0.2, cluster_gap_spacings: 2.5, gap_metric: range_difference,"
+      " min_width_m: 0.15, masked_sectors: [[-0.5, -0.1], [0.1, 0.5]]}\n"
       "tracking: {matching: nearest_neighbour}\n"
       "classification: {presumption: guilt, static_weight_limit: 20}\n"
       "free_space: {require_unseen: always}\n"
       "max_pose_jump_m: 2.0\n",
       "test.yaml");
   EXPECT_EQ(c.segmentation.cluster_gap_m, 0.2);
+  EXPECT_EQ(c.segmentation.cluster_gap_spacings, 2.5);
   EXPECT_EQ(c.segmentation.gap_metric, GapMetric::kRangeDifference);
   EXPECT_EQ(c.segmentation.min_width_m, 0.15);
   ASSERT_EQ(c.segmentation.masked_sectors.size(), 2u);
@@ -179,6 +181,8 @@ TEST(ConfigYaml, UnknownKeysWrongTypesAndBadValuesAreErrorsNamingTheKey) {
   expect_error("segmentation: {cluster_gap_m: -0.1}", "segmentation.cluster_gap_m must be");
   expect_error("segmentation: {min_points: many}", "segmentation.min_points must be an integer");
   expect_error("segmentation: {min_width_m: -0.1}", "segmentation.min_width_m must be");
+  expect_error("segmentation: {cluster_gap_spacings: 50}",
+               "segmentation.cluster_gap_spacings must be");
   expect_error("tracking: {matching: psychic}", "tracking.matching must be one of");
   expect_error("classification: {presumption: [1]}", "classification.presumption must be");
   expect_error("free_space: {require_unseen: sometimes}",

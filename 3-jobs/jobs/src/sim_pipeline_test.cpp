@@ -276,7 +276,9 @@ FilteredScenario simulate_and_filter(
 // stood, is too old for free space to be asked about it; when the leg steps out into space seen
 // free beside the leg tracked as dynamic, free space is asked all the same
 // (free_space.mark_beside_dynamic). Without it the leg was kept for about 3 scans at every such
-// step: 0.817 removed against 0.897 (and 0.9990 kept against 0.9983).
+// step: 0.817 removed against 0.897 (and 0.9990 kept against 0.9983). Since far points within
+// three beam spacings join (segmentation.cluster_gap_spacings) the default removes 0.909 and
+// 0.888 without the rule (0.887 and 0.835 with eps alone).
 // When that walker's route ends, a leg's dynamic track, lost for a few scans with its gate
 // widened, was matched to a low thing first seen up close nearby and stayed dynamic while it
 // stood (still_scans_to_static), its beams never learned by the map: 0.9963 kept without
@@ -295,7 +297,7 @@ TEST(SimPipeline, DrivingRobotAlongRoughCorridorsKeepsItsWalls) {
   EXPECT_GE(office.rates.rejection_rate(), 0.85);
   const eval::Rates& without_beside = office.variant_rates.at(0);
   EXPECT_GE(without_beside.preservation_rate(), 0.995);
-  EXPECT_GE(office.rates.rejection_rate() - without_beside.rejection_rate(), 0.04);
+  EXPECT_GE(office.rates.rejection_rate() - without_beside.rejection_rate(), 0.015);
   const eval::Rates& without_still = office.variant_rates.at(1);
   EXPECT_GE(without_still.preservation_rate(), 0.999);
   // The first scans may fall back to the odometry while the map is young (measured: 461 of 462
@@ -373,13 +375,23 @@ TEST(SimPipeline, ALowThingFirstSeenBesideAWalkerIsNotConfirmedByTheWalker) {
 // at 10-11 m, in pieces kept as static. The registered map learned its trail, and the cart's
 // side was then explained by its own earlier passes and kept (1838 of its 3817 beams removed;
 // 0.52 of all moving beams, 0.9990 of the static ones kept). A voxel hit again where the scanner
-// has long seen through is now started afresh: measured 2309 of the cart's, 0.605 and 0.9997
-// (with the mixed pixels at removed edges removed too, tracking.remove_edge_pixels: 2372, 0.631).
-// The target (0.90 removed) is not reached.
+// has long seen through is started afresh: 2309 of the cart's, 0.605 and 0.9997 (with the mixed
+// pixels at removed edges removed too, tracking.remove_edge_pixels: 2372, 0.631).
+// The pieces at 10-11 m were the segmentation's: the cart seen at a slant there has its points
+// 6-27 cm apart, beyond eps (0.1 m). Joined within three beam spacings
+// (segmentation.cluster_gap_spacings; 18 cm at 10 m), the cart is one object tracked as it
+// crosses: measured 0.771 of the moving beams removed and 1.0000 of the static kept; 0.581 and
+// 0.9998 with eps alone. The target (0.90 removed) is not reached.
 TEST(SimPipeline, AWarehouseCartIsNotExplainedByItsOwnEarlierPasses) {
-  const FilteredScenario aisles = simulate_and_filter("warehouse_aisles");
+  const FilteredScenario aisles = simulate_and_filter(
+      "warehouse_aisles",
+      {[](DynamicFilterConfig& c) { c.segmentation.cluster_gap_spacings = 0.0; }});
   EXPECT_GE(aisles.rates.preservation_rate(), 0.9995);
-  EXPECT_GE(aisles.rates.rejection_rate(), 0.58);
+  EXPECT_GE(aisles.rates.rejection_rate(), 0.72);
+  const eval::Rates& eps_only = aisles.variant_rates.at(0);
+  EXPECT_GE(eps_only.preservation_rate(), 0.9995);
+  EXPECT_GE(eps_only.rejection_rate(), 0.55);
+  EXPECT_GE(aisles.rates.rejection_rate() - eps_only.rejection_rate(), 0.1);
   EXPECT_GT(aisles.stats.counters.map_voxels_restarted, 0);
 }
 
@@ -390,11 +402,22 @@ TEST(SimPipeline, AWarehouseCartIsNotExplainedByItsOwnEarlierPasses) {
 // the aisle, across the cart's line: the cart's side, its outline its own at both ends, moves
 // along itself at 1 m/s and the sensor along it at about 0 (registration.slide_tolerance_mps).
 // Measured 0.803 of the moving beams removed (the cart 3515 of its 4457 beams), 0.746 with the
-// tolerance 0 (2988); 0.9996 of the static beams kept either way.
+// tolerance 0 (2988); 0.9996 of the static beams kept either way. Those figures are with eps
+// alone (segmentation.cluster_gap_spacings 0), as this test runs: with the default the cart is
+// one object at 10 m, tracked on its far passes, and the map no longer explains it on this seed
+// (0.886 removed with the tolerance and without; 0.810 and 0.754 with eps alone, measured
+// December 7).
 TEST(SimPipeline, ACartExplainedByItsOwnPassesMovesUnlikeASlidingOutline) {
   const FilteredScenario aisles = simulate_and_filter(
-      "warehouse_aisles",
-      {[](DynamicFilterConfig& c) { c.registration.slide_tolerance_mps = 0.0; }}, 2, {},
+      "warehouse_aisles", {[](DynamicFilterConfig& c) {
+        c.segmentation.cluster_gap_spacings = 0.0;
+        c.registration.slide_tolerance_mps = 0.0;
+      }},
+      2,
+      [](FilterJobOptions& o) {
+        o.config = DynamicFilterConfig{};
+        o.config->segmentation.cluster_gap_spacings = 0.0;
+      },
       [](sim::Scenario& s) { s.robot.speed_mps = 1.5; });
   const eval::Rates& without = aisles.variant_rates.at(0);
   EXPECT_GE(aisles.rates.preservation_rate(), 0.9993);
@@ -404,35 +427,42 @@ TEST(SimPipeline, ACartExplainedByItsOwnPassesMovesUnlikeASlidingOutline) {
 }
 
 // An open hall whose walls are mostly out of range, full of small things whose returns flicker,
-// people crossing it far from the robot. The default keeps the clutter (it never moves) and
-// misses many of the walkers: they are legs of 2-3 beams at 5-10 m, under N_min, and only those
-// first seen nearer are followed out there through their fragments (measured over five seeds:
-// 0.9994 kept, 0.63 removed; 0.38 before they were followed). N_min falling with range removes
-// them (0.9993, 0.92 before) but is off by default: on real recordings it removes far clutter
-// (docs/dynamic_filter.md).
-TEST(SimPipeline, AnOpenClutteredHallKeepsItsClutterAndFarWalkersNeedNminByWidth) {
+// people crossing it far from the robot. The default keeps the clutter (it never moves). With eps
+// alone it missed many of the walkers: each leg is 2-3 beams at 5-10 m, under N_min, and only
+// those first seen nearer were followed out there through their fragments (measured over five
+// seeds: 0.9994 kept, 0.63 removed; 0.38 before they were followed). A walker's two legs are
+// 10-25 cm apart: within three beam spacings out there (segmentation.cluster_gap_spacings: 15 cm at
+// 8 m) they are one object of 4-6 beams. N_min falling with range (segmentation.min_width_m 0.1,
+// off by default: on real recordings it removes far clutter, docs/dynamic_filter.md) adds the
+// single legs. Seed 1, measured: 0.861 removed by the default, 0.62 with eps alone, 0.911 with
+// min_width_m.
+TEST(SimPipeline, AnOpenClutteredHallKeepsItsClutterAndFarWalkersAreObjectsWithinBeamSpacings) {
   const std::string dir = test::temp_dir();
   const sim::Scenario hall = load_scenario(scenario_path("cluttered_hall"));
   const std::string bag = dir + "/hall.bag";
   write_simulation(sim::simulate(hall, 1), hall, bag);
-  double removed[2] = {0.0, 0.0};
-  for (int with_width = 0; with_width < 2; ++with_width) {
+  const std::vector<ConfigChange> configs = {
+      [](DynamicFilterConfig&) {},
+      [](DynamicFilterConfig& c) { c.segmentation.cluster_gap_spacings = 0.0; },
+      [](DynamicFilterConfig& c) { c.segmentation.min_width_m = 0.1; }};
+  std::vector<double> removed;
+  for (std::size_t k = 0; k < configs.size(); ++k) {
     FilterJobOptions o;
     o.input = bag;
     o.output = dir + "/hall_filtered.bag";
     o.scale_to_scanner = true;
     o.config = DynamicFilterConfig{};
-    o.config->segmentation.min_width_m = with_width != 0 ? 0.1 : 0.0;
+    configs[k](*o.config);
     run_filter_job(o);
     const eval::Rates r = evaluate_bags(bag, o.output);
-    EXPECT_GE(r.preservation_rate(), 0.995) << "min_width_m " << with_width * 0.1;
-    removed[with_width] = r.rejection_rate();
+    EXPECT_GE(r.preservation_rate(), 0.995) << "configuration " << k;
+    removed.push_back(r.rejection_rate());
     std::remove(o.output.c_str());
   }
-  EXPECT_LT(removed[0], 0.75);  // Measured 0.62 (0.36 before dynamic tracks followed fragments).
-  // Measured 0.874 (0.924 before N_min fell only within 0.8 of range_max: walkers at 8.8-11 m).
-  EXPECT_GE(removed[1], 0.85);
-  EXPECT_GT(removed[1] - removed[0], 0.15);
+  EXPECT_GE(removed[0], 0.80);
+  EXPECT_LT(removed[1], 0.75);
+  EXPECT_GE(removed[0] - removed[1], 0.15);
+  EXPECT_GE(removed[2], 0.85);
   std::remove(bag.c_str());
 }
 

@@ -381,8 +381,8 @@ TEST(SimPipeline, ALowThingFirstSeenBesideAWalkerIsNotConfirmedByTheWalker) {
 // 6-27 cm apart, beyond eps (0.1 m). Joined within three beam spacings
 // (segmentation.cluster_gap_spacings; 18 cm at 10 m), the cart is one object tracked as it
 // crosses: measured 0.771 of the moving beams removed and 1.0000 of the static kept; 0.581 and
-// 0.9998 with eps alone. Other seeds go the other way: on seed 2 the cart at 10 m is joined with
-// what lies beside it and stays static (0.698 -> 0.537; five seeds 0.626 -> 0.633,
+// 0.9998 with eps alone. Other seeds go the other way: on seed 2 the cart at 10 m, one object cut
+// by a rack's end, stays static (0.698 -> 0.537; five seeds 0.626 -> 0.633,
 // docs/dynamic_filter.md). The target (0.90 removed) is not reached.
 TEST(SimPipeline, AWarehouseCartIsNotExplainedByItsOwnEarlierPasses) {
   const FilteredScenario aisles = simulate_and_filter(

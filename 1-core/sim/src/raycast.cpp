@@ -41,17 +41,21 @@ double ray_distance(const Circle& shape, const Eigen::Vector2d& origin,
   return far >= 0.0 ? far : kInf;
 }
 
-namespace {
-
-// A number in [0, 1) drawn from the seed, the circle and the beam's direction (splitmix64).
-double flicker_draw(std::uint64_t seed, std::size_t circle, double bearing_rad) {
-  std::uint64_t bits = 0;
-  std::memcpy(&bits, &bearing_rad, sizeof bits);
-  std::uint64_t z = seed ^ (bits * 0x9e3779b97f4a7c15ULL) ^ (circle * 0xbf58476d1ce4e5b9ULL);
+double unit_draw(std::uint64_t seed, std::uint64_t a, std::uint64_t b) {
+  std::uint64_t z = seed ^ (a * 0x9e3779b97f4a7c15ULL) ^ (b * 0xbf58476d1ce4e5b9ULL);
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
   z ^= z >> 31;
   return static_cast<double>(z >> 11) * 0x1.0p-53;
+}
+
+namespace {
+
+// A number in [0, 1) drawn from the seed, the circle and the beam's direction.
+double flicker_draw(std::uint64_t seed, std::size_t circle, double bearing_rad) {
+  std::uint64_t bits = 0;
+  std::memcpy(&bits, &bearing_rad, sizeof bits);
+  return unit_draw(seed, bits, circle);
 }
 
 // Whether a beam along @p direction that reaches @p segment returns from it (Segment::

@@ -24,6 +24,7 @@ constexpr double kMaxTurnRate = 0.6;             // rad/s, the robot's.
 constexpr double kCornerRadius_m = 0.5;
 constexpr double kCornerTurn_rad = 20.0 * kPi / 180.0;
 constexpr double kLookahead_m = 1.0;  // The robot steers for a point this far ahead on its leg.
+constexpr std::uint64_t kDarkDraw = 0x6461726b;  // "dark": the draw of which surfaces are dark.
 
 constexpr auto reject = reject_field;
 
@@ -397,6 +398,11 @@ void Scenario::validate() const {
     if (!(lidar.speckle_beams_max >= 1 && lidar.speckle_beams_max <= 64))
       reject("lidar.speckle_beams_max", lidar.speckle_beams_max, "in [1, 64]");
   }
+  if (!(lidar.dark_share >= 0.0 && lidar.dark_share <= 1.0))
+    reject("lidar.dark_share", lidar.dark_share, "in [0, 1]");
+  if (lidar.dark_share > 0.0 &&
+      !(lidar.dark_reach_m > 0.0 && lidar.dark_reach_m <= lidar.range_max_m))
+    reject("lidar.dark_reach_m", lidar.dark_reach_m, "in (0, lidar.range_max_m]");
   if (world.rough_walls) {
     const RoughWalls& w = *world.rough_walls;
     if (!(w.amplitude_m >= 0.0 && w.amplitude_m <= 1.0))
@@ -780,6 +786,12 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
     }
   };
 
+  // Whether static shape @p id (raycast's numbering) is drawn dark (LidarConfig::dark_share).
+  const auto dark = [&](std::int32_t id) {
+    return lidar.dark_share > 0.0 &&
+           unit_draw(seed, static_cast<std::uint64_t>(id), kDarkDraw) < lidar.dark_share;
+  };
+
   // Speckle: runs of beams that reached nothing in range return one range in the band (see
   // LidarConfig::speckle).
   const auto add_speckle = [&](ScanFrame& frame, const std::vector<std::int32_t>& hit) {
@@ -886,7 +898,11 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
         } else if (id >= segment_count + static_circles) {
           actor = actor_of_circle[static_cast<std::size_t>(id - segment_count - static_circles)];
         }
-        if (actor < 0) {
+        if (actor < 0 && r > lidar.dark_reach_m && dark(id)) {
+          // A dark surface beyond its reach returns nothing. Its draws were made all the same, so
+          // that every other beam is as it would be without dark surfaces.
+          r = std::numeric_limits<float>::infinity();
+        } else if (actor < 0) {
           frame.truth[i] = Truth::kStatic;
         } else {
           frame.truth[i] =

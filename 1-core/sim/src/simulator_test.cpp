@@ -680,6 +680,51 @@ TEST(Scenario, BadValuesAreRejectedByName) {
   s.lidar.speckle_range_m = {4.0, 5.0};
   s.lidar.speckle_beams_max = 0;
   expect_named(s, "lidar.speckle_beams_max");
+  s = Scenario{};
+  s.lidar.dark_share = 1.5;
+  expect_named(s, "lidar.dark_share");
+  s.lidar.dark_share = 0.5;  // And no reach.
+  expect_named(s, "lidar.dark_reach_m");
+  s.lidar.dark_reach_m = 50.0;  // Beyond range_max_m.
+  expect_named(s, "lidar.dark_reach_m");
+}
+
+// Dark surfaces: a share of the static shapes returns only within dark_reach_m. Every beam that
+// differs from the same run without them is a static return beyond the reach that now returns
+// nothing; walkers, nearer returns and the bright shapes are as they were, draw for draw. The
+// room's walls are cut in two, so that it has nine static shapes, some of them dark.
+TEST(Simulator, DarkSurfacesReturnOnlyWithinTheirReachAndNothingElseChanges) {
+  Scenario s = room_with_walker();
+  s.world.walls = {{{-5, -5}, {0, -5}}, {{0, -5}, {5, -5}}, {{5, -5}, {5, 0}},
+                   {{5, 0}, {5, 5}},    {{5, 5}, {0, 5}},   {{0, 5}, {-5, 5}},
+                   {{-5, 5}, {-5, 0}},  {{-5, 0}, {-5, -5}}};
+  s.lidar.range_max_m = 12.0;
+  s.lidar.range_noise_m = 0.01;  // Noise and dropouts draw from the stream: it must stay in step.
+  s.lidar.dropout = 0.01;
+  const SimulationOutput plain = simulate(s, 3);
+  s.lidar.dark_share = 0.5;
+  s.lidar.dark_reach_m = 6.0;
+  const SimulationOutput dark = simulate(s, 3);
+  ASSERT_EQ(plain.scans.size(), dark.scans.size());
+  std::int64_t silenced = 0, bright_beyond = 0;
+  for (std::size_t k = 0; k < plain.scans.size(); ++k) {
+    const ScanFrame& a = plain.scans[k];
+    const ScanFrame& b = dark.scans[k];
+    for (std::size_t i = 0; i < a.truth.size(); ++i) {
+      const float r = a.scan.ranges_m[i];
+      if (a.scan.ranges_m[i] == b.scan.ranges_m[i] && a.truth[i] == b.truth[i]) {
+        bright_beyond += a.truth[i] == Truth::kStatic && r > 6.0F ? 1 : 0;
+        continue;
+      }
+      ASSERT_EQ(a.truth[i], Truth::kStatic) << "scan " << k << " beam " << i;
+      EXPECT_GT(r, 6.0F);
+      EXPECT_TRUE(std::isinf(b.scan.ranges_m[i]));
+      EXPECT_EQ(b.truth[i], Truth::kNoReturn);
+      ++silenced;
+    }
+  }
+  EXPECT_GT(silenced, 0);
+  EXPECT_GT(bright_beyond, 0);  // Not every shape is dark.
 }
 
 // Speckle: sporadic returns in the band, in runs of at most speckle_beams_max beams, only where

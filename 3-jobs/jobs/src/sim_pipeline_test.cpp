@@ -94,6 +94,12 @@ TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
   EXPECT_EQ(speckled.lidar.speckle, 0.016);
   EXPECT_EQ(speckled.lidar.speckle_range_m, std::make_pair(4.0, 5.6));
   EXPECT_EQ(speckled.lidar.speckle_beams_max, 3);
+  const sim::Scenario dark =
+      parse_scenario("lidar: {range_max_m: 5.6, dark_share: 0.5, dark_reach_m: 5.0}", "s.yaml");
+  EXPECT_EQ(dark.lidar.dark_share, 0.5);
+  EXPECT_EQ(dark.lidar.dark_reach_m, 5.0);
+  expect_error("lidar: {range_max_m: 5.6, dark_share: 0.5, dark_reach_m: 9}",
+               "lidar.dark_reach_m must be");
   expect_error("world: {rough_walls: {low_things_radius_m: [0.2]}}",
                "world.rough_walls.low_things_radius_m must be a list of 2 numbers");
   expect_error("world: {rough_walls: {low_things_seen_within_m: [3, 2]}}",

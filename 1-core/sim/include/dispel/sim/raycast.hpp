@@ -72,4 +72,8 @@ double ray_distance(const Circle& shape, const Eigen::Vector2d& origin,
 /// a segment of zero length.
 double incidence_cosine(const Segment& shape, const Eigen::Vector2d& direction);
 
+/// A number in [0, 1) that depends only on @p seed, @p a and @p b (splitmix64): a draw that
+/// takes nothing from a random stream, so that drawing it leaves every other draw as it was.
+double unit_draw(std::uint64_t seed, std::uint64_t a, std::uint64_t b);
+
 }  // namespace dispel::sim

@@ -136,9 +136,10 @@ struct LidarConfig {
   /// Reach that depends on the surface: this share of the static shapes (pieces of wall,
   /// furniture, trees, posts; drawn per shape from the seed) is dark and returns a beam only
   /// within dark_reach_m; farther, the beam returns nothing. A real scanner's range_max holds for
-  /// bright targets: outdoors, person_following_outdoor_1's 5.6 m scanner returned from hedges
-  /// only within about 5.2 m, so what the beams before saw as free (nothing returned) returns
-  /// once the robot has come near enough. 0: every surface returns up to range_max_m.
+  /// bright targets: outdoors, person_following_outdoor_1's 5.6 m scanner returned from a surface
+  /// at the edge of its view only from about 5.3 m on, as the robot drove towards it, so what the
+  /// beams before saw as free (nothing returned) returned once the robot was near enough. 0:
+  /// every surface returns up to range_max_m.
   double dark_share = 0.0;
   double dark_reach_m = 0.0;
   /// Beams are measured over the sweep: beam i at stamp + i * time_increment, where

@@ -25,6 +25,11 @@ constexpr double kCornerRadius_m = 0.5;
 constexpr double kCornerTurn_rad = 20.0 * kPi / 180.0;
 constexpr double kLookahead_m = 1.0;  // The robot steers for a point this far ahead on its leg.
 constexpr std::uint64_t kDarkDraw = 0x6461726b;  // "dark": the draw of which surfaces are dark.
+// The draws of a bump (LidarConfig::bumps_per_min): its time in its slot, its size, its lean.
+constexpr std::uint64_t kBumpTimeDraw = 0x62756d70;
+constexpr std::uint64_t kBumpSizeDraw = 0x62756d71;
+constexpr std::uint64_t kBumpLeanDraw = 0x62756d72;
+constexpr std::uint64_t kFloorNoiseDraw = 0x666c6f6f;  // "floo": the floor's range noise.
 
 constexpr auto reject = reject_field;
 
@@ -403,6 +408,16 @@ void Scenario::validate() const {
   if (lidar.dark_share > 0.0 &&
       !(lidar.dark_reach_m > 0.0 && lidar.dark_reach_m <= lidar.range_max_m))
     reject("lidar.dark_reach_m", lidar.dark_reach_m, "in (0, lidar.range_max_m]");
+  if (!(lidar.bumps_per_min >= 0.0 && lidar.bumps_per_min <= 60.0))
+    reject("lidar.bumps_per_min", lidar.bumps_per_min, "in [0, 60]");
+  if (lidar.bumps_per_min > 0.0) {
+    if (!(lidar.height_m > 0.0 && lidar.height_m <= 5.0))
+      reject("lidar.height_m", lidar.height_m, "in (0, 5] with bumps");
+    if (!(lidar.bump_tilt_deg > 0.0 && lidar.bump_tilt_deg <= 30.0))
+      reject("lidar.bump_tilt_deg", lidar.bump_tilt_deg, "in (0, 30] with bumps");
+    if (!(lidar.bump_s > 0.0 && lidar.bump_s <= 60.0 / lidar.bumps_per_min))
+      reject("lidar.bump_s", lidar.bump_s, "in (0, 60 / bumps_per_min]");
+  }
   if (world.rough_walls) {
     const RoughWalls& w = *world.rough_walls;
     if (!(w.amplitude_m >= 0.0 && w.amplitude_m <= 1.0))
@@ -792,6 +807,64 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
            unit_draw(seed, static_cast<std::uint64_t>(id), kDarkDraw) < lidar.dark_share;
   };
 
+  // The scan plane's tilt at time t (LidarConfig::bumps_per_min): nose down (pitch) and to the
+  // left side down (roll), radians; zero between bumps.
+  const auto tilt = [&](double t) -> std::pair<double, double> {
+    if (!(lidar.bumps_per_min > 0.0)) return {0.0, 0.0};
+    const double slot_s = 60.0 / lidar.bumps_per_min;
+    const double at = t - scenario.start_time_s;
+    const auto slot = static_cast<std::int64_t>(std::floor(at / slot_s));
+    for (std::int64_t k = slot; k >= slot - 1 && k >= 0; --k) {
+      const auto key = static_cast<std::uint64_t>(k);
+      const double start = (static_cast<double>(k) +
+                            unit_draw(seed, key, kBumpTimeDraw) * (1.0 - lidar.bump_s / slot_s)) *
+                           slot_s;
+      const double phase = (at - start) / lidar.bump_s;
+      if (phase < 0.0 || phase > 1.0) continue;
+      const double size =
+          unit_draw(seed, key, kBumpSizeDraw) * lidar.bump_tilt_deg * kDeg * std::sin(kPi * phase);
+      const double lean = 2.0 * unit_draw(seed, key, kBumpLeanDraw) - 1.0;
+      return {size, lean * size};
+    }
+    return {0.0, 0.0};
+  };
+  // Where beam i of a scan taken at t, at bearing @p bearing_rad in the laser frame, meets the
+  // floor (infinity where it does not descend).
+  const double mount_yaw = scenario.robot.laser_mount.yaw_rad;
+  const auto floor_range = [&](double t, double bearing_rad) {
+    const auto [pitch, roll] = tilt(t);
+    const double phi = mount_yaw + bearing_rad;
+    const double descent = std::tan(pitch) * std::cos(phi) + std::tan(roll) * std::sin(phi);
+    return descent > 1e-9 ? lidar.height_m / descent : std::numeric_limits<double>::infinity();
+  };
+
+  // The floor where a tilted beam meets it nearer than what it returned (or within reach where it
+  // returned nothing), after every other draw of the scan: its noise is hashed, not drawn, so that
+  // the rest of the run is as it would be without bumps.
+  const auto add_floor = [&](ScanFrame& frame, double t, std::int64_t step) {
+    if (!(lidar.bumps_per_min > 0.0)) return;
+    const double reach = lidar.range_limit_m > 0.0
+                             ? std::min(lidar.range_limit_m, lidar.range_max_m)
+                             : lidar.range_max_m;
+    for (std::size_t i = 0; i < frame.truth.size(); ++i) {
+      if (masked[i] != 0) continue;
+      const double g =
+          floor_range(t + static_cast<double>(i) * time_increment, frame.scan.bearing_rad(i));
+      float& r = frame.scan.ranges_m[i];
+      if (!(g <= reach && g >= geometry.range_min_m) ||
+          (frame.truth[i] != Truth::kNoReturn && !(g < r))) {
+        continue;
+      }
+      const auto key = (static_cast<std::uint64_t>(step) << 20) + i;
+      const double u1 = std::max(unit_draw(seed, key, kFloorNoiseDraw), 1e-12);
+      const double u2 = unit_draw(seed, key, kFloorNoiseDraw + 1);
+      const double normal = std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2);
+      r = static_cast<float>(g + (lidar.range_noise_m + lidar.range_noise_per_m * g) * normal);
+      frame.truth[i] = Truth::kStatic;
+      frame.actor[i] = 0;
+    }
+  };
+
   // Speckle: runs of beams that reached nothing in range return one range in the band (see
   // LidarConfig::speckle).
   const auto add_speckle = [&](ScanFrame& frame, const std::vector<std::int32_t>& hit) {
@@ -910,6 +983,7 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
           frame.actor[i] = actor + 1;
         }
       }
+      add_floor(frame, t, step);
       add_speckle(frame, hit);
       if (sink.scan) sink.scan(std::move(frame));
     }

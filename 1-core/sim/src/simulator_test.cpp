@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -687,6 +688,16 @@ TEST(Scenario, BadValuesAreRejectedByName) {
   expect_named(s, "lidar.dark_reach_m");
   s.lidar.dark_reach_m = 50.0;  // Beyond range_max_m.
   expect_named(s, "lidar.dark_reach_m");
+  s = Scenario{};
+  s.lidar.bumps_per_min = 100.0;
+  expect_named(s, "lidar.bumps_per_min");
+  s.lidar.bumps_per_min = 4.0;  // And no height.
+  expect_named(s, "lidar.height_m");
+  s.lidar.height_m = 0.3;  // And no tilt.
+  expect_named(s, "lidar.bump_tilt_deg");
+  s.lidar.bump_tilt_deg = 8.0;
+  s.lidar.bump_s = 16.0;  // Longer than a bump's slot of 15 s.
+  expect_named(s, "lidar.bump_s");
 }
 
 // Dark surfaces: a share of the static shapes returns only within dark_reach_m. Every beam that
@@ -725,6 +736,78 @@ TEST(Simulator, DarkSurfacesReturnOnlyWithinTheirReachAndNothingElseChanges) {
   }
   EXPECT_GT(silenced, 0);
   EXPECT_GT(bright_beyond, 0);  // Not every shape is dark.
+}
+
+// Bumps: the scan plane tilts and the beams meet the floor. Every beam that differs from the same
+// run without bumps returns the floor, static, nearer than what it returned before (or where it
+// returned nothing); the rest of the run is as it was, draw for draw. The floor is flat, so in
+// each scan its points lie on one line in the laser frame (the scanner does not sweep here, so
+// the tilt is one per scan); and it comes and goes: scans without it between the bumps. The room
+// is opened (one wall), so that the floor is seen within range where nothing else is.
+TEST(Simulator, BumpsShowTheFloorAsALineThatComesAndGoesAndNothingElseChanges) {
+  Scenario s = room_with_walker();
+  s.duration_s = 40.0;
+  s.world.walls = {{{-5, -5}, {5, -5}}};
+  s.lidar.range_max_m = 12.0;
+  s.lidar.range_noise_m = 0.01;  // Noise and dropouts draw from the stream: it must stay in step.
+  s.lidar.dropout = 0.01;
+  const SimulationOutput plain = simulate(s, 3);
+  s.lidar.height_m = 0.3;
+  s.lidar.bumps_per_min = 6.0;
+  s.lidar.bump_tilt_deg = 8.0;
+  s.lidar.bump_s = 0.6;
+  const SimulationOutput bumpy = simulate(s, 3);
+  ASSERT_EQ(plain.scans.size(), bumpy.scans.size());
+  std::int64_t floor_beams = 0, floor_scans = 0, runs = 0, longest = 0, run = 0;
+  double worst_off_line = 0.0;
+  for (std::size_t k = 0; k < plain.scans.size(); ++k) {
+    const ScanFrame& a = plain.scans[k];
+    const ScanFrame& b = bumpy.scans[k];
+    std::vector<Eigen::Vector2d> points;
+    for (std::size_t i = 0; i < a.truth.size(); ++i) {
+      if (a.scan.ranges_m[i] == b.scan.ranges_m[i] && a.truth[i] == b.truth[i]) continue;
+      ASSERT_EQ(b.truth[i], Truth::kStatic) << "scan " << k << " beam " << i;
+      EXPECT_EQ(b.actor[i], 0);
+      if (a.truth[i] != Truth::kNoReturn) {
+        EXPECT_LT(b.scan.ranges_m[i], a.scan.ranges_m[i] + 0.05F);
+      }
+      // At most 8 degrees down and as much to the side: nowhere nearer than 0.3 m / tan(8 deg)
+      // / sqrt(2), 1.5 m.
+      EXPECT_GT(b.scan.ranges_m[i], 1.45F);
+      const double bearing = b.scan.bearing_rad(i);
+      const double r = b.scan.ranges_m[i];
+      points.emplace_back(r * std::cos(bearing), r * std::sin(bearing));
+    }
+    floor_beams += static_cast<std::int64_t>(points.size());
+    if (points.size() >= 20) {
+      // The line through the points, from their covariance: the largest distance from it.
+      Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+      for (const Eigen::Vector2d& p : points) mean += p;
+      mean /= static_cast<double>(points.size());
+      Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+      for (const Eigen::Vector2d& p : points) cov += (p - mean) * (p - mean).transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+      const Eigen::Vector2d normal = eig.eigenvectors().col(0);
+      for (const Eigen::Vector2d& p : points) {
+        worst_off_line = std::max(worst_off_line, std::abs((p - mean).dot(normal)));
+      }
+    }
+    if (!points.empty()) {
+      ++floor_scans;
+      runs += run == 0 ? 1 : 0;
+      longest = std::max(longest, ++run);
+    } else {
+      run = 0;
+    }
+  }
+  EXPECT_GT(floor_beams, 1000);
+  // Six bumps a minute for 40 s: a bump in each of the 4 slots, some too small to reach the floor
+  // within range; each seen in at most 0.6 s at 20 Hz, 13 scans.
+  EXPECT_GE(runs, 2);
+  EXPECT_LE(runs, 4);
+  EXPECT_LE(longest, 13);
+  EXPECT_LT(floor_scans, static_cast<std::int64_t>(plain.scans.size()) / 5);
+  EXPECT_LT(worst_off_line, 0.1);  // Range noise 0.01 m plus 0.0 m per m.
 }
 
 // Speckle: sporadic returns in the band, in runs of at most speckle_beams_max beams, only where

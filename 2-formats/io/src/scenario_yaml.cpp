@@ -212,11 +212,13 @@ void read_robot(const Reader& r, const YAML::Node& n, sim::RobotConfig& robot) {
 }
 
 void read_lidar(const Reader& r, const YAML::Node& n, sim::LidarConfig& l) {
-  r.keys(
-      n, "lidar",
-      {"range_max_m", "fov_deg", "resolution_deg", "rate_hz", "range_limit_m", "masked_sectors_deg",
-       "range_noise_m", "range_noise_per_m", "incidence_noise", "mixed_pixels", "dropout", "sweep",
-       "speckle", "speckle_range_m", "speckle_beams_max", "dark_share", "dark_reach_m"});
+  r.keys(n, "lidar", {"range_max_m",   "fov_deg",           "resolution_deg",
+                      "rate_hz",       "range_limit_m",     "masked_sectors_deg",
+                      "range_noise_m", "range_noise_per_m", "incidence_noise",
+                      "mixed_pixels",  "dropout",           "sweep",
+                      "speckle",       "speckle_range_m",   "speckle_beams_max",
+                      "dark_share",    "dark_reach_m",      "height_m",
+                      "bumps_per_min", "bump_tilt_deg",     "bump_s"});
   if (n["range_noise_per_m"])
     l.range_noise_per_m = r.number(n["range_noise_per_m"], "lidar.range_noise_per_m");
   if (n["incidence_noise"])
@@ -239,6 +241,10 @@ void read_lidar(const Reader& r, const YAML::Node& n, sim::LidarConfig& l) {
     l.speckle_beams_max = r.integer(n["speckle_beams_max"], "lidar.speckle_beams_max");
   if (n["dark_share"]) l.dark_share = r.number(n["dark_share"], "lidar.dark_share");
   if (n["dark_reach_m"]) l.dark_reach_m = r.number(n["dark_reach_m"], "lidar.dark_reach_m");
+  if (n["height_m"]) l.height_m = r.number(n["height_m"], "lidar.height_m");
+  if (n["bumps_per_min"]) l.bumps_per_min = r.number(n["bumps_per_min"], "lidar.bumps_per_min");
+  if (n["bump_tilt_deg"]) l.bump_tilt_deg = r.number(n["bump_tilt_deg"], "lidar.bump_tilt_deg");
+  if (n["bump_s"]) l.bump_s = r.number(n["bump_s"], "lidar.bump_s");
   if (n["masked_sectors_deg"]) {
     const YAML::Node& m = n["masked_sectors_deg"];
     if (!m.IsSequence()) r.fail("lidar.masked_sectors_deg must be a list of [begin_deg, end_deg]");

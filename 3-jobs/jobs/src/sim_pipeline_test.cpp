@@ -100,6 +100,15 @@ TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
   EXPECT_EQ(dark.lidar.dark_reach_m, 5.0);
   expect_error("lidar: {range_max_m: 5.6, dark_share: 0.5, dark_reach_m: 9}",
                "lidar.dark_reach_m must be");
+  const sim::Scenario bumpy = parse_scenario(
+      "lidar: {height_m: 0.3, bumps_per_min: 4, bump_tilt_deg: 8, bump_s: 0.5}", "s.yaml");
+  EXPECT_EQ(bumpy.lidar.height_m, 0.3);
+  EXPECT_EQ(bumpy.lidar.bumps_per_min, 4.0);
+  EXPECT_EQ(bumpy.lidar.bump_tilt_deg, 8.0);
+  EXPECT_EQ(bumpy.lidar.bump_s, 0.5);
+  expect_error("lidar: {bumps_per_min: 4, bump_tilt_deg: 8}", "lidar.height_m must be");
+  expect_error("lidar: {height_m: 0.3, bumps_per_min: 4, bump_tilt_deg: 8, bump_s: 20}",
+               "lidar.bump_s must be");
   expect_error("world: {rough_walls: {low_things_radius_m: [0.2]}}",
                "world.rough_walls.low_things_radius_m must be a list of 2 numbers");
   expect_error("world: {rough_walls: {low_things_seen_within_m: [3, 2]}}",

@@ -142,6 +142,20 @@ struct LidarConfig {
   /// every surface returns up to range_max_m.
   double dark_share = 0.0;
   double dark_reach_m = 0.0;
+  /// The ground, seen when the robot pitches: the scan plane is height_m above a flat floor, and
+  /// the robot meets bumps_per_min bumps a minute (one drawn from the seed at a random time in
+  /// each slot of 60 / bumps_per_min seconds). A bump tilts the scan plane for bump_s, as half a
+  /// sine, by up to bump_tilt_deg (its size drawn uniformly), nose down, leaning to one side by a
+  /// drawn share of that. A beam whose tilted line meets the floor nearer than what it hits (or
+  /// within range_max_m where it hits nothing) returns the floor: a smooth arc across the view
+  /// that moves with the robot, in the scans of the bump only. person_following_outdoor_1 shows
+  /// it (scans 4986-4991: the whole view returns an arc at 2.2 m ahead to 3.6 m at its edges that
+  /// comes and goes within 0.6 s). Truth code static: the floor does not move. 0: no bumps (no
+  /// draws are made).
+  double height_m = 0.0;
+  double bumps_per_min = 0.0;
+  double bump_tilt_deg = 0.0;
+  double bump_s = 0.6;
   /// Beams are measured over the sweep: beam i at stamp + i * time_increment, where
   /// time_increment is one revolution (1 / rate_hz) divided by the beams a full turn would have;
   /// the robot moves during the scan. false: every beam at the stamp (time_increment 0).

@@ -712,25 +712,39 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
       }
     }
   }
-  const double elapsed = stamp_s - track.marked_s;
-  if (track.free_space_pending && elapsed >= kFreeSpaceDecision_s) {
-    // Decided once, when the object has had time to move (see kFreeSpaceDecision_s): refuted
-    // when the map explains the object now (a surface that has stood there, which the track took
-    // after it lost what free space marked, or grew onto as more of it came into view); else
-    // confirmed when it has moved as a walker can, or it is beside a track that has (unless that
-    // is what marked it: a low thing first hit up close beside a walker, office_revisits'
-    // walls); else refuted.
-    track.free_space_pending = false;
+  // An object made dynamic by free space is judged kFreeSpaceDecision_s later (see there): refuted
+  // when the map explains it now (a surface that has stood there, which the track took after it
+  // lost what free space marked, or grew onto as more of it came into view); else confirmed when
+  // it has moved as a walker can, or it is beside a track that has (unless that is what marked
+  // it: a low thing first hit up close beside a walker, office_revisits' walls); else refuted.
+  // Farther from where it appeared than a walker gets by then, it is refuted as soon as that is
+  // seen, in any scan before the decision: the track went on to something else (the floor nearer
+  // as the scanner pitched on, a piece of a surface beside it), and the verdict that would be
+  // refuted at the decision removed no more of its beams meanwhile.
+  if (track.free_space_pending) {
+    const double elapsed = stamp_s - track.marked_s;
     const double moved = moved_since_marked(track, obs);
-    const bool moved_plausibly =
-        moved > kFreeSpaceConfirm_m && moved <= kFreeSpaceConfirm_m + kMaxWalkerSpeed_mps * elapsed;
+    const bool decided = elapsed >= kFreeSpaceDecision_s;
+    const bool jumped = moved > kFreeSpaceConfirm_m + kMaxWalkerSpeed_mps * elapsed;
+    const bool moved_plausibly = moved > kFreeSpaceConfirm_m && !jumped;
     const bool explained =
-        obs.explained_share >= kExplainedShare && !slides_unlike_the_sensor(track, obs);
-    if (explained || (!moved_plausibly && (track.marked_beside ||
-                                           !beside_moving_track(track, obs.points[kCentroid])))) {
+        decided && obs.explained_share >= kExplainedShare && !slides_unlike_the_sensor(track, obs);
+    if ((decided || jumped) &&
+        (explained || (!moved_plausibly && (track.marked_beside ||
+                                            !beside_moving_track(track, obs.points[kCentroid]))))) {
+      track.free_space_pending = false;
       track.free_space_refuted = true;
       track.cls = initial_class_state(cc);
       ++counters_.free_space_refuted;
+      if (jumped) {
+        // What it jumped from was another thing: its motion starts afresh here.
+        for (int k = 0; k < 3; ++k)
+          track.kf[k] = PointVelocityFilter(obs.points[k], config_.velocity);
+        track.speed_mps = 0.0;
+        evidence = MotionEvidence::kNone;
+      }
+    } else if (decided) {
+      track.free_space_pending = false;
     }
   }
   // Part of the robot: still in the sensor frame for long, near it.

@@ -330,7 +330,10 @@ TEST(SimPipeline, DrivingRobotAlongRoughCorridorsKeepsItsWalls) {
 // guessed turn on until the pose had turned a full circle, and the walker ahead held the robot
 // back; the map then slid past everything. Seed 4, the whole 90 s: measured 0.951 of the static
 // beams kept and 0.783 of the moving removed, 0.550 and 0.885 without the rules (seeds 1-10:
-// 0.880 and 0.882 with, 0.718 and 0.894 without; docs/results.md).
+// 0.880 and 0.882 with, 0.718 and 0.894 without; docs/results.md). Since a free-space verdict
+// whose track jumps farther than a walker gets is refuted at once (December 7, seventh session),
+// 0.952 and 0.783 with the rules and 0.772 and 0.872 without: the tracks of what the sliding map
+// put in free space jump, and are refuted sooner.
 TEST(SimPipeline, ALaserOnlyRobotFollowingAWalkerKeepsItsBackground) {
   const FilteredScenario following =
       simulate_and_filter("person_following", {[](DynamicFilterConfig& c) {
@@ -346,7 +349,7 @@ TEST(SimPipeline, ALaserOnlyRobotFollowingAWalkerKeepsItsBackground) {
   EXPECT_GE(following.rates.rejection_rate(), 0.7);
   EXPECT_GT(following.stats.counters.registration_held_sideways, 0);
   EXPECT_EQ(following.stats.counters.scans_without_odometry, following.stats.scans);
-  EXPECT_LE(following.variant_rates.at(0).preservation_rate(), 0.7);
+  EXPECT_LE(following.variant_rates.at(0).preservation_rate(), 0.85);
 }
 
 // What N_min by width cost outdoors. person_following_outdoor_1 (a real robot outdoors, 5.6 m

@@ -718,9 +718,9 @@ void DynamicFilter::update_class(Track& track, const Observation& obs, double st
   // it has moved as a walker can, or it is beside a track that has (unless that is what marked
   // it: a low thing first hit up close beside a walker, office_revisits' walls); else refuted.
   // Farther from where it appeared than a walker gets by then, it is refuted as soon as that is
-  // seen, in any scan before the decision: the track went on to something else (the floor nearer
-  // as the scanner pitched on, a piece of a surface beside it), and the verdict that would be
-  // refuted at the decision removed no more of its beams meanwhile.
+  // seen, in any scan before the decision: the track went on to another thing (a piece nearby
+  // that it took after it was unseen for a few scans). At the decision that jump could pass for a
+  // walk, and the velocity it gave the track for motion.
   if (track.free_space_pending) {
     const double elapsed = stamp_s - track.marked_s;
     const double moved = moved_since_marked(track, obs);

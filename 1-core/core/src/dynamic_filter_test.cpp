@@ -442,12 +442,12 @@ TEST(DynamicFilter, FreeSpaceNeverConfirmsATrackThatTookAPieceOfAKnownSurface) {
 }
 
 TEST(DynamicFilter, ATrackMarkedByFreeSpaceThatJumpsFartherThanAWalkerIsStaticAtOnce) {
-  // person_following_outdoor_1 (a real robot outdoors): as the scanner pitched, the floor came
-  // into view in space the beams had seen through, and nearer in the next scans; free space made
-  // the track dynamic, and the track went on to what it could match, farther than a walker gets.
-  // Here a still scanner: a short thing in free space for two scans, unseen for three, then
-  // another 1 m away (1 m in 0.25 s: a walker gets 0.15 m + 2.5 m/s x 0.25 s, 0.78 m). Its verdict
-  // is refuted in the scan the track takes it, not at the decision 0.4 s after the marking.
+  // person_following_outdoor_1 (a real robot outdoors): a track that free space had marked was
+  // unseen for three scans, then took a piece nearby, and at the decision 0.4 s after the marking
+  // that read as a walk, which confirmed it. Here a still scanner: a short thing in free space for
+  // two scans, unseen for three, then another 0.9 m away (in 0.25 s: a walker gets 0.15 m +
+  // 2.5 m/s x 0.25 s, 0.78 m; by the decision 1.15 m, so the decision alone confirmed it). Its
+  // verdict is refuted in the scan the track takes it, and its velocity starts afresh.
   Scenario s;
   s.walls = room(10.0, 6.0);
   s.pieces = [](double t, const Pose2& /*sensor*/) -> std::vector<sim::Segment> {

@@ -332,8 +332,8 @@ TEST(SimPipeline, DrivingRobotAlongRoughCorridorsKeepsItsWalls) {
 // beams kept and 0.783 of the moving removed, 0.550 and 0.885 without the rules (seeds 1-10:
 // 0.880 and 0.882 with, 0.718 and 0.894 without; docs/results.md). Since a free-space verdict
 // whose track jumps farther than a walker gets is refuted at once (December 7, seventh session),
-// 0.952 and 0.783 with the rules and 0.772 and 0.872 without: the tracks of what the sliding map
-// put in free space jump, and are refuted sooner.
+// 0.952 and 0.783 with the rules and 0.772 and 0.872 without (why the variant gains is not
+// traced).
 TEST(SimPipeline, ALaserOnlyRobotFollowingAWalkerKeepsItsBackground) {
   const FilteredScenario following =
       simulate_and_filter("person_following", {[](DynamicFilterConfig& c) {

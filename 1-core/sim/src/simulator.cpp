@@ -368,6 +368,22 @@ void check_held_run_size(const Scenario& s, double duration_s, const std::string
   }
 }
 
+void check_stops(const std::vector<Stop>& stops, const std::string& field) {
+  for (std::size_t i = 0; i < stops.size(); ++i) {
+    const std::string at = field + ".stops[" + std::to_string(i) + "]";
+    if (!(stops[i].at_s >= 0.0 && std::isfinite(stops[i].at_s)))
+      reject(at + ".at_s", stops[i].at_s, "finite and >= 0");
+    if (!(stops[i].for_s > 0.0 && std::isfinite(stops[i].for_s)))
+      reject(at + ".for_s", stops[i].for_s, "finite and > 0");
+  }
+}
+
+// Whether @p stops hold whoever has them still at @p t_s seconds into the run.
+bool stopped_at(const std::vector<Stop>& stops, double t_s) {
+  return std::any_of(stops.begin(), stops.end(),
+                     [t_s](const Stop& s) { return t_s >= s.at_s && t_s < s.at_s + s.for_s; });
+}
+
 }  // namespace
 
 void Scenario::validate() const {
@@ -375,6 +391,7 @@ void Scenario::validate() const {
   if (!(start_time_s > 0.0)) reject("start_time_s", start_time_s, "> 0");
   if (!(robot.wheel_base_m > 0.0)) reject("robot.wheel_base_m", robot.wheel_base_m, "> 0");
   if (!(robot.speed_mps >= 0.0)) reject("robot.speed_mps", robot.speed_mps, ">= 0");
+  check_stops(robot.stops, "robot");
   if (!(lidar.range_max_m > 0.0)) reject("lidar.range_max_m", lidar.range_max_m, "> 0");
   if (!(lidar.fov_deg > 0.0 && lidar.fov_deg <= 360.0))
     reject("lidar.fov_deg", lidar.fov_deg, "in (0, 360]");
@@ -494,6 +511,7 @@ void Scenario::validate() const {
     if (!(a.speed_mps >= 0.0 && a.speed_mps <= 10.0))
       reject(field + ".speed_mps", a.speed_mps, "in [0, 10]");
     if (!(a.pause_s >= 0.0)) reject(field + ".pause_s", a.pause_s, ">= 0");
+    check_stops(a.stops, field);
   }
   // Bounds on what the run is made of: each person is ray-cast for every beam of every scan,
   // each waypoint and lane is held in memory.
@@ -1002,7 +1020,8 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
       return std::abs(wrap_angle(std::atan2(out.y(), out.x()) - std::atan2(in.y(), in.x()))) >
              kCornerTurn_rad;
     };
-    if (!robot_path.done()) {
+    const double run_s = t - scenario.start_time_s;
+    if (!robot_path.done() && !stopped_at(scenario.robot.stops, run_s)) {
       const Eigen::Vector2d reached = robot_path.target();
       bool corner = corner_at_target();
       if (robot_path.advance_if_reached(pose.translation(), corner ? kCornerRadius_m : 0.15)) {
@@ -1060,6 +1079,7 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
         s.pause_left -= kStep;
         continue;
       }
+      if (stopped_at(s.spec.stops, run_s)) continue;
       if (s.path.done() || s.spec.speed_mps <= 0.0) continue;
       const Eigen::Vector2d to = s.path.target() - s.position;
       const double d = to.norm();

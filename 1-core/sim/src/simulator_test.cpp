@@ -246,6 +246,59 @@ TEST(Simulator, RobotFollowsTheLawnmowerAndOdometryDriftsFromTheTruth) {
   EXPECT_LT(drift, 2.0);    // ...but odometry stays usable.
 }
 
+// Stops: the robot brakes to a halt at a stop's start and stands until its end, then drives on;
+// a person stands from their stop's start (beams of them are then truth "standing") and walks on
+// after it. A person following the robot's path stops with it, as person_following_outdoor_1's
+// robot and the person it follows stand together for minutes.
+TEST(Simulator, StopsHoldTheRobotAndAPersonStillAndBothGoOnAfter) {
+  Scenario s;
+  s.duration_s = 30.0;
+  s.world.walls = {{{-5, -5}, {40, -5}}, {{-5, 5}, {40, 5}}};
+  s.robot.speed_mps = 1.0;
+  s.robot.waypoints = {{35.0, 0.0}};
+  s.robot.loop = false;
+  s.robot.stops = {{5.0, 10.0}};
+  s.lidar.fov_deg = 180.0;
+  s.lidar.resolution_deg = 1.0;
+  s.lidar.rate_hz = 10.0;
+  Actor walker;
+  walker.waypoints = {{3.0, 0.0}, {38.0, 0.0}};
+  walker.speed_mps = 1.0;
+  walker.loop = false;
+  walker.stops = {{4.8, 10.4}};
+  s.actors = {walker};
+  const SimulationOutput out = simulate(s, 3);
+  const auto pose_at = [&](double run_s) {
+    for (const SensorSample& k : out.sensors) {
+      if (k.stamp_s - s.start_time_s >= run_s) return k.true_pose;
+    }
+    return out.sensors.back().true_pose;
+  };
+  // It brakes within 1.5 m of where it was at 5 s (its motors slow it by at most 0.5 m/s a
+  // second) and stands from then until 15 s.
+  const Pose2 at_stop = pose_at(5.0), halted = pose_at(8.0), before_end = pose_at(14.9);
+  EXPECT_GT(at_stop.x_m, 3.5);
+  EXPECT_LT(halted.x_m - at_stop.x_m, 1.5);
+  EXPECT_NEAR(before_end.x_m, halted.x_m, 1e-9);
+  EXPECT_NEAR(before_end.y_m, halted.y_m, 1e-9);
+  EXPECT_GT(pose_at(25.0).x_m, before_end.x_m + 5.0);  // And drove on.
+  // The person: standing while stopped, walking before and after.
+  std::int32_t standing_during = 0, moving_during = 0, moving_after = 0;
+  for (const ScanFrame& f : out.scans) {
+    const double run_s = f.scan.stamp_s - s.start_time_s;
+    for (std::size_t i = 0; i < f.truth.size(); ++i) {
+      if (f.actor[i] != 1) continue;
+      const bool during = run_s > 5.0 && run_s < 15.0;
+      standing_during += during && f.truth[i] == Truth::kStill;
+      moving_during += during && f.truth[i] == Truth::kMoving;
+      moving_after += run_s > 15.5 && f.truth[i] == Truth::kMoving;
+    }
+  }
+  EXPECT_GT(standing_during, 500);
+  EXPECT_EQ(moving_during, 0);
+  EXPECT_GT(moving_after, 100);
+}
+
 // A path through a wall (or a corner taken too fast) would record what no robot can see: the
 // run is refused, naming the time and place.
 TEST(Simulator, ARobotThatWouldDriveThroughAWallIsRefused) {
@@ -698,6 +751,16 @@ TEST(Scenario, BadValuesAreRejectedByName) {
   s.lidar.bump_tilt_deg = 8.0;
   s.lidar.bump_s = 16.0;  // Longer than a bump's slot of 15 s.
   expect_named(s, "lidar.bump_s");
+  s = Scenario{};
+  s.robot.stops = {{-1.0, 5.0}};
+  expect_named(s, "robot.stops[0].at_s");
+  s.robot.stops = {{1.0, 0.0}};
+  expect_named(s, "robot.stops[0].for_s");
+  s.robot.stops = {{1.0, 2.0}};
+  s.actors = {Actor{}};
+  s.actors[0].waypoints = {{1.0, 1.0}};
+  s.actors[0].stops = {{1.0, 2.0}, {std::numeric_limits<double>::quiet_NaN(), 1.0}};
+  expect_named(s, "actors[0].stops[1].at_s");
 }
 
 // Dark surfaces: a share of the static shapes returns only within dark_reach_m. Every beam that

@@ -182,9 +182,21 @@ void read_world(const Reader& r, const YAML::Node& n, sim::StaticWorld& w) {
   }
 }
 
+// [[at_s, for_s], ...]
+std::vector<sim::Stop> read_stops(const Reader& r, const YAML::Node& n, const std::string& path) {
+  if (!n.IsSequence()) r.fail(path + " must be a list of [at_s, for_s]");
+  std::vector<sim::Stop> stops;
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const auto v = r.numbers(n[i], path + "[" + std::to_string(i) + "]", 2);
+    stops.push_back({v[0], v[1]});
+  }
+  return stops;
+}
+
 void read_robot(const Reader& r, const YAML::Node& n, sim::RobotConfig& robot) {
   r.keys(n, "robot",
-         {"start", "speed_mps", "waypoints", "loop", "lawnmower", "wheel_base_m", "laser_mount"});
+         {"start", "speed_mps", "waypoints", "loop", "lawnmower", "wheel_base_m", "laser_mount",
+          "stops"});
   if (n["start"]) {
     const auto s = r.numbers(n["start"], "robot.start", 3);
     robot.start = {s[0], s[1], s[2] * kPi / 180.0};
@@ -193,6 +205,7 @@ void read_robot(const Reader& r, const YAML::Node& n, sim::RobotConfig& robot) {
   if (n["waypoints"]) robot.waypoints = r.points(n["waypoints"], "robot.waypoints");
   if (n["loop"]) robot.loop = r.boolean(n["loop"], "robot.loop");
   if (n["wheel_base_m"]) robot.wheel_base_m = r.number(n["wheel_base_m"], "robot.wheel_base_m");
+  if (n["stops"]) robot.stops = read_stops(r, n["stops"], "robot.stops");
   if (n["laser_mount"]) {
     const auto m = r.numbers(n["laser_mount"], "robot.laser_mount", 3);
     robot.laser_mount = {m[0], m[1], m[2] * kPi / 180.0};
@@ -278,9 +291,9 @@ void read_actors(const Reader& r, const YAML::Node& n, std::vector<sim::Actor>& 
   for (std::size_t i = 0; i < n.size(); ++i) {
     const std::string path = "actors[" + std::to_string(i) + "]";
     const YAML::Node& e = n[i];
-    r.keys(
-        e, path,
-        {"type", "waypoints", "standing", "speed_mps", "pause_s", "loop", "start_delay_s", "size"});
+    r.keys(e, path,
+           {"type", "waypoints", "standing", "speed_mps", "pause_s", "loop", "start_delay_s",
+            "stops", "size"});
     sim::Actor a;
     const std::string type = e["type"] ? e["type"].as<std::string>() : "person";
     if (type == "cart" || type == "forklift") {
@@ -300,6 +313,7 @@ void read_actors(const Reader& r, const YAML::Node& n, std::vector<sim::Actor>& 
     if (e["pause_s"]) a.pause_s = r.number(e["pause_s"], path + ".pause_s");
     if (e["loop"]) a.loop = r.boolean(e["loop"], path + ".loop");
     if (e["start_delay_s"]) a.start_delay_s = r.number(e["start_delay_s"], path + ".start_delay_s");
+    if (e["stops"]) a.stops = read_stops(r, e["stops"], path + ".stops");
     if (e["size"]) {
       const auto s = r.numbers(e["size"], path + ".size", 2);
       a.length_m = s[0];

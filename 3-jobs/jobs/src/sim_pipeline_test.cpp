@@ -29,9 +29,10 @@ std::string scenario_path(const std::string& name) {
 }
 
 TEST(ScenarioYaml, ShippedScenariosLoadAndValidate) {
-  for (const char* name : {"thesis_hall", "empty_hall", "busy_corridor", "warehouse_forklift",
-                           "office_corridors", "warehouse_aisles", "office_corridors_slam",
-                           "cluttered_hall", "office_revisits", "person_following"}) {
+  for (const char* name :
+       {"thesis_hall", "empty_hall", "busy_corridor", "warehouse_forklift", "office_corridors",
+        "warehouse_aisles", "office_corridors_slam", "cluttered_hall", "office_revisits",
+        "person_following", "person_following_stops"}) {
     const sim::Scenario s = load_scenario(scenario_path(name));
     EXPECT_EQ(s.name, name);
     // Every scripted actor goes past the furniture, pillars and walls, not through them.
@@ -60,6 +61,10 @@ TEST(ScenarioYaml, ShippedScenariosLoadAndValidate) {
   EXPECT_EQ(revisits.low_things_max_radius_m, 0.3);
   EXPECT_EQ(revisits.low_things_min_seen_within_m, 2.0);
   EXPECT_EQ(revisits.low_things_max_seen_within_m, 3.5);
+  const sim::Scenario stops = load_scenario(scenario_path("person_following_stops"));
+  ASSERT_EQ(stops.robot.stops.size(), 2u);
+  ASSERT_EQ(stops.actors.at(0).stops.size(), 2u);
+  EXPECT_LT(stops.actors[0].stops[0].at_s, stops.robot.stops[0].at_s);
 }
 
 TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
@@ -109,6 +114,20 @@ TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
   expect_error("lidar: {bumps_per_min: 4, bump_tilt_deg: 8}", "lidar.height_m must be");
   expect_error("lidar: {height_m: 0.3, bumps_per_min: 4, bump_tilt_deg: 8, bump_s: 20}",
                "lidar.bump_s must be");
+  const sim::Scenario stopping = parse_scenario(
+      "robot: {waypoints: [[5, 0]], stops: [[2, 10], [30, 5]]}\n"
+      "actors: [{type: person, waypoints: [[1, 1], [4, 1]], stops: [[1.5, 10.5]]}]\n",
+      "s.yaml");
+  ASSERT_EQ(stopping.robot.stops.size(), 2u);
+  EXPECT_EQ(stopping.robot.stops[1].at_s, 30.0);
+  EXPECT_EQ(stopping.robot.stops[1].for_s, 5.0);
+  ASSERT_EQ(stopping.actors.at(0).stops.size(), 1u);
+  EXPECT_EQ(stopping.actors[0].stops[0].for_s, 10.5);
+  expect_error("robot: {stops: [[2]]}", "robot.stops[0] must be a list of 2 numbers");
+  expect_error("robot: {stops: 3}", "robot.stops must be a list of [at_s, for_s]");
+  expect_error("robot: {stops: [[2, 0]]}", "robot.stops[0].for_s must be");
+  expect_error("actors: [{type: person, waypoints: [[1, 1], [4, 1]], stops: [[-1, 2]]}]",
+               "actors[0].stops[0].at_s must be");
   expect_error("world: {rough_walls: {low_things_radius_m: [0.2]}}",
                "world.rough_walls.low_things_radius_m must be a list of 2 numbers");
   expect_error("world: {rough_walls: {low_things_seen_within_m: [3, 2]}}",

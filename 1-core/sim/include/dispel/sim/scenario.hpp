@@ -94,6 +94,13 @@ struct Lawnmower {
   int lanes = 4;
 };
 
+/// A time when someone or something stands still: from at_s seconds into the run, for for_s
+/// seconds, wherever it is then (a robot brakes to a halt within its motors' limits).
+struct Stop {
+  double at_s = 0.0;
+  double for_s = 0.0;
+};
+
 struct RobotConfig {
   Pose2 start;
   double speed_mps = 0.067;                ///< The thesis's robot.
@@ -102,6 +109,8 @@ struct RobotConfig {
   std::optional<Lawnmower> lawnmower;
   double wheel_base_m = 0.5;
   Pose2 laser_mount{0.2, 0.0, 0.0};  ///< Laser in base_link.
+  /// Stretches of the run the robot stands (a robot that waits for the person it follows).
+  std::vector<Stop> stops;
 };
 
 struct LidarConfig {
@@ -184,7 +193,8 @@ struct Actor {
   double pause_s = 0.0;  ///< Standing time at each waypoint.
   bool loop = true;      ///< Walk the waypoints again from the start.
   double start_delay_s = 0.0;
-  double length_m = 1.2;  ///< Carts: footprint.
+  std::vector<Stop> stops;  ///< Stretches of the run it stands, wherever it is.
+  double length_m = 1.2;    ///< Carts: footprint.
   double width_m = 0.8;
 };
 

@@ -45,6 +45,7 @@ nlohmann::ordered_json stats_json(const jobs::FilterJobOptions& o, const jobs::F
                         {"edge_pixels", s.counters.beams_removed_edge_pixels}};
   j["beams_kept_long_occupied"] = s.counters.beams_kept_long_occupied;
   j["free_space_refuted"] = s.counters.free_space_refuted;
+  j["free_space_held"] = s.counters.free_space_held;
   j["free_space_seen_before"] = s.counters.free_space_seen_before;
   j["still_alone_to_static"] = s.counters.still_alone_to_static;
   j["fragment_follows"] = s.counters.fragment_follows;

@@ -51,6 +51,16 @@ constexpr double kFreeSpaceDecision_s = 0.4;
 // moved alike (within kEdgesAgree_m).
 constexpr double kElongated_m = 0.8;
 constexpr double kEdgesAgree_m = 0.15;
+// A thing longer than a walker (kElongated_m) that free space marks in a scan where at least
+// kNowhereShare of its beams returned nothing, or something more than kNowhereMargin_m farther, in
+// the scan before appeared from nowhere: the floor, seen as the scanner pitches, is such an arc
+// across the view, new in every scan and 0.5 m nearer or farther in the next
+// (person_following_outdoor_1). It is kept in that scan and removed from the next on, unless the
+// track jumps (below). A vehicle that a track loses and takes up again, or that comes out from
+// behind something, was near in the scan before and is removed at once; the walkers of the real
+// recording were never longer than 0.6 m.
+constexpr double kNowhereMargin_m = 0.3;
+constexpr double kNowhereShare = 0.9;
 // Faster than this from where it appeared, the track has jumped to another object (a chair leg
 // next to it), which is no evidence of motion: refuted too.
 constexpr double kMaxWalkerSpeed_mps = 2.5;
@@ -232,6 +242,7 @@ void DynamicFilter::process(const LaserScan& scan, const std::optional<Pose2>& s
     update_velocities(scan.stamp_s);
     classify(scan, pose, out.segmentation);
     follow_fragments(scan, out.segmentation, pose);
+    previous_ranges_ = scan.ranges_m;
     // The body is learned only when the sensor's motion was measured (by odometry, or by a
     // registration that holds in every direction): a guessed motion while the robot stands would
     // count someone standing in front of it as moving with it.
@@ -680,7 +691,8 @@ void DynamicFilter::classify(const LaserScan& scan, const Pose2& sensor_pose,
   attached_.resize(observations_.size());
   for (std::size_t i = 0; i < observations_.size(); ++i) {
     const Track& t = tracks_[track_of_object_[i]];
-    verdicts_[i] = {t.cls.object_class, t.speed_mps};
+    verdicts_[i] = {held_now(t, scan.stamp_s) ? ObjectClass::kStatic : t.cls.object_class,
+                    t.speed_mps};
     attached_[i] = t.attached ? 1 : 0;
   }
   forget_lost_tracks();  // Tracks move: track_of_object_ is stale from here on.
@@ -908,6 +920,9 @@ void DynamicFilter::mark_objects_in_free_space(const LaserScan& scan,
     t.marked_last = observations_[i].points[kLast];
     t.marked_edges_trusted = observations_[i].trusted[kFirst] && observations_[i].trusted[kLast];
     t.marked_s = scan.stamp_s;
+    t.held = observations_[i].extent_m > kElongated_m &&
+             appeared_from_nowhere(scan, segmentation, static_cast<std::int32_t>(i));
+    counters_.free_space_held += t.held ? 1 : 0;
     t.cls.object_class = ObjectClass::kDynamic;
     t.cls.dynamic_weight =
         std::max(t.cls.dynamic_weight, config_.classification.dynamic_weight_limit);
@@ -1018,6 +1033,27 @@ BeamLabel DynamicFilter::beam_label(std::size_t b, std::int32_t segment_label, b
 // walker whose planted foot has not moved while its free-space evidence was weighed.
 // How far a track marked by free space has moved since: its centroid's distance from where it
 // was, or for an elongated object its motion across itself and, when its edges show it, along.
+// Whether at least kNowhereShare of object @p object's beams returned nothing in the last learned
+// scan, or something more than kNowhereMargin_m farther (see there).
+bool DynamicFilter::appeared_from_nowhere(const LaserScan& scan, const Segmentation& segmentation,
+                                          std::int32_t object) const {
+  if (previous_ranges_.size() != scan.size()) return false;
+  std::int32_t beams = 0, from_nowhere = 0;
+  for (std::size_t b = 0; b < scan.size(); ++b) {
+    if (segmentation.beam_labels[b] != object) continue;
+    ++beams;
+    const float was = previous_ranges_[b];
+    const bool returned = was >= scan.range_min_m && was <= scan.range_max_m;
+    if (!returned || was > scan.ranges_m[b] + kNowhereMargin_m) ++from_nowhere;
+  }
+  return beams > 0 && static_cast<double>(from_nowhere) >= kNowhereShare * beams;
+}
+
+// Whether @p track is kept in the scan of @p stamp_s as held (see kNowhereMargin_m).
+bool DynamicFilter::held_now(const Track& track, double stamp_s) {
+  return track.held && track.free_space_pending && track.marked_s == stamp_s;
+}
+
 double DynamicFilter::moved_since_marked(const Track& track, const Observation& obs) {
   const Eigen::Vector2d moved = obs.points[kCentroid] - track.marked_at;
   const Eigen::Vector2d axis = obs.points[kLast] - obs.points[kFirst];
@@ -1073,7 +1109,7 @@ double DynamicFilter::PredictedOutline::distance(const Eigen::Vector2d& p) const
 void DynamicFilter::predict_moving_outlines(double stamp_s) {
   moving_outlines_.clear();
   for (const Track& t : tracks_) {
-    if (moving_now(t))
+    if (moving_now(t) && !held_now(t, stamp_s))
       moving_outlines_.emplace_back(t.kf[kFirst], t.kf[kLast], stamp_s - t.last_seen_s);
   }
 }
@@ -1195,7 +1231,6 @@ void DynamicFilter::follow_fragments(const LaserScan& scan, const Segmentation& 
     t.missed_scans = 0;
     ++counters_.fragment_follows;
   }
-  previous_ranges_ = scan.ranges_m;
 }
 
 void DynamicFilter::write_tracks(FilterResult& out) const {

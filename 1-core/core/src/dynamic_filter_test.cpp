@@ -467,6 +467,55 @@ TEST(DynamicFilter, ATrackMarkedByFreeSpaceThatJumpsFartherThanAWalkerIsStaticAt
   EXPECT_GE(filter.counters().free_space_refuted, 1);
 }
 
+TEST(DynamicFilter, AThingLongerThanAWalkerFromNowhereIsKeptInItsFirstScan) {
+  // person_following_outdoor_1 (a real robot outdoors): as the robot pitched, its scanner saw the
+  // floor, an arc across the view where the scan before returned nothing or something far, and in
+  // the next scan 0.5 m nearer or farther; free space removed it in its first scan. Here a still
+  // scanner in a room, and from scan 20 on, in space seen free:
+  //  - floor: a 1.5 m line 2.6 m away, 0.5 m nearer in each of the next three scans, then gone;
+  //  - long: a 1.5 m line 2.0 m away that stays;
+  //  - short: a 0.4 m line (a walker's size) 2.0 m away that stays.
+  // A long thing from nowhere is kept in its first scan and removed from the next on; the floor,
+  // a new thing or a jump in every scan, is never removed; the short thing is removed at once.
+  enum class Piece { kFloor, kLong, kShort };
+  for (const Piece piece : {Piece::kFloor, Piece::kLong, Piece::kShort}) {
+    Scenario s;
+    s.walls = room(10.0, 6.0);
+    s.pieces = [piece](double t, const Pose2& /*sensor*/) -> std::vector<sim::Segment> {
+      const auto k = static_cast<int>(std::lround(t / kPeriod));
+      if (k < 20) return {};
+      if (piece == Piece::kFloor) {
+        if (k > 23) return {};
+        const double y = 2.6 - 0.5 * (k - 20);
+        return {{{-0.75, y}, {0.75, y}}};
+      }
+      const double half = piece == Piece::kLong ? 0.75 : 0.2;
+      return {{{-half, 2.0}, {half, 2.0}}};
+    };
+    DynamicFilter filter{DynamicFilterConfig{}};
+    const auto st = run(s, filter, 30);
+    const std::vector<int> removed = removed_per_scan(st, 0);
+    std::string per_scan;
+    for (int k = 18; k < 30; ++k) per_scan += std::to_string(removed[k]) + " ";
+    switch (piece) {
+      case Piece::kFloor:
+        for (int k = 18; k < 30; ++k)
+          EXPECT_EQ(removed[k], 0) << "floor, scan " << k << ": " << per_scan;
+        EXPECT_GE(filter.counters().free_space_held, 1);
+        break;
+      case Piece::kLong:
+        EXPECT_EQ(removed[20], 0) << "long: " << per_scan;
+        EXPECT_GT(removed[21], 20) << "long: free space did not mark it: " << per_scan;
+        EXPECT_EQ(filter.counters().free_space_held, 1);
+        break;
+      case Piece::kShort:
+        EXPECT_GT(removed[20], 5) << "short: " << per_scan;
+        EXPECT_EQ(filter.counters().free_space_held, 0);
+        break;
+    }
+  }
+}
+
 TEST(DynamicFilter, APlaceThatReturnedBeforeIsNotFreeSpaceEvidenceWithoutOdometry) {
   // negative_2's lasers (no odometry, no people) removed surfaces that return only now and then:
   // a pane seen square-on, a return between error codes, where the scans between saw 1-7 m

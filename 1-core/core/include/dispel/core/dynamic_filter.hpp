@@ -65,6 +65,9 @@ struct FilterCounters {
   /// Tracks made dynamic by free space that had not moved like a walker 0.4 s later (static
   /// again; docs/dynamic_filter.md, "Per scan", free space).
   std::int64_t free_space_refuted = 0;
+  /// Objects longer than a walker that free space marked when they appeared from nowhere, kept
+  /// in that first scan (docs/dynamic_filter.md, "A long thing from nowhere waits a scan").
+  std::int64_t free_space_held = 0;
   /// Objects free space would have marked but for points the map had seen there before
   /// (free_space.require_unseen).
   std::int64_t free_space_seen_before = 0;
@@ -261,6 +264,9 @@ class DynamicFilter {
     Eigen::Vector2d marked_last = Eigen::Vector2d::Zero();
     bool marked_edges_trusted = false;
     double marked_s = 0.0;
+    // Marked in its first scan as a thing longer than a walker where nothing was near in the scan
+    // before: kept in that scan (see kNowhereMargin_m).
+    bool held = false;
     bool attached = false;  // Judged part of the robot in the last scan it was seen.
     // Since when the fragments it follows have returned the ranges of the scan before (-1: not
     // following such fragments).
@@ -280,6 +286,9 @@ class DynamicFilter {
   void observe(const Segmentation& segmentation, const Pose2& sensor_pose, float range_max_m);
   void explain(const LaserScan& scan, const Segmentation& segmentation);
   static double moved_since_marked(const Track& track, const Observation& obs);
+  bool appeared_from_nowhere(const LaserScan& scan, const Segmentation& segmentation,
+                             std::int32_t object) const;
+  static bool held_now(const Track& track, double stamp_s);
   bool beside_moving_track(const Track& self, const Eigen::Vector2d& point_m) const;
   bool slides_unlike_the_sensor(const Track& track, const Observation& obs) const;
   void recur(const LaserScan& scan, const Segmentation& segmentation, const Pose2& sensor_pose,
@@ -350,7 +359,7 @@ class DynamicFilter {
   // robot), with the share of the scans counted that returned it there (decayed lazily, as
   // RecurringRange). What such a beam returns well beyond that range moves with the robot.
   std::vector<RecurringRange> body_;
-  std::vector<float> previous_ranges_;  // The last scan follow_fragments() saw (learned scans).
+  std::vector<float> previous_ranges_;  // The last learned scan's ranges.
   std::vector<char> attached_;  // Scratch: per object of this scan, judged part of the robot.
   std::vector<double> spacing_limit_;             // Scratch: per object, for free-space evidence,
   std::vector<double> points_needed_;             // the points in free space that would mark it,

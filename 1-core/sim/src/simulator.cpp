@@ -94,6 +94,18 @@ struct ActorState {
   bool moving = false;
 };
 
+// Gait::kPlanted: how far a foot is ahead of the body at gait phase @p phase (2 pi a stride of
+// kStride_m): standing on the floor for kStance of the stride, from kStance / 2 of a stride ahead
+// to as far behind, then swinging forward.
+constexpr double kStride_m = 1.4;
+constexpr double kStance = 0.6;
+double planted_foot_ahead(double phase) {
+  const double u = phase / (2.0 * kPi) - std::floor(phase / (2.0 * kPi));  // In [0, 1).
+  const double reach = 0.5 * kStance * kStride_m;
+  if (u < kStance) return reach - u * kStride_m;
+  return -reach + (u - kStance) / (1.0 - kStance) * 2.0 * reach;
+}
+
 // The motion over dt at speed v and turn rate w, exactly along the arc.
 Pose2 arc_motion(double v, double w, double dt) {
   if (std::abs(w) < 1e-9) return {v * dt, 0.0, 0.0};
@@ -932,9 +944,13 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
         const Eigen::Vector2d fwd(std::cos(s.heading), std::sin(s.heading));
         const Eigen::Vector2d left(-fwd.y(), fwd.x());
         if (s.spec.kind == ActorKind::kPerson) {
-          const double swing = 0.15 * std::sin(s.gait_phase);
-          world.circles.push_back({s.position + swing * fwd + 0.1 * left, 0.06});
-          world.circles.push_back({s.position - swing * fwd - 0.1 * left, 0.06});
+          double ahead_a = 0.15 * std::sin(s.gait_phase), ahead_b = -ahead_a;
+          if (scenario.gait == Gait::kPlanted) {
+            ahead_a = planted_foot_ahead(s.gait_phase);
+            ahead_b = planted_foot_ahead(s.gait_phase + kPi);
+          }
+          world.circles.push_back({s.position + ahead_a * fwd + 0.1 * left, 0.06});
+          world.circles.push_back({s.position + ahead_b * fwd - 0.1 * left, 0.06});
           actor_of_circle.insert(actor_of_circle.end(), 2, static_cast<std::int32_t>(a));
         } else {
           for (const Segment& e :
@@ -1100,7 +1116,7 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
       if (stride.norm() > 1e-12) s.heading = std::atan2(stride.y(), stride.x());
       s.position += stride;
       s.moving = true;
-      s.gait_phase += 2.0 * kPi * stepd / 1.4;  // A stride of 1.4 m (two steps).
+      s.gait_phase += 2.0 * kPi * stepd / kStride_m;  // Two steps.
       if (s.path.advance_if_reached(s.position, 1e-6)) s.pause_left = s.spec.pause_s;
     }
   }

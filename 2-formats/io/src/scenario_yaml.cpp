@@ -347,9 +347,17 @@ sim::Scenario parse_scenario(const std::string& yaml_text, const std::string& or
   sim::Scenario s;
   try {
     r.keys(root, "",
-           {"name", "duration_s", "world", "robot", "lidar", "sensors", "actors", "random_people"});
+           {"name", "duration_s", "gait", "world", "robot", "lidar", "sensors", "actors",
+            "random_people"});
     if (root["name"]) s.name = root["name"].as<std::string>();
     if (root["duration_s"]) s.duration_s = r.number(root["duration_s"], "duration_s");
+    if (root["gait"]) {
+      const std::string gait = root["gait"].as<std::string>();
+      if (gait != "sway" && gait != "planted") {
+        r.fail("gait must be sway or planted, got " + quote(gait));
+      }
+      s.gait = gait == "planted" ? sim::Gait::kPlanted : sim::Gait::kSway;
+    }
     if (root["world"]) read_world(r, root["world"], s.world);
     if (root["robot"]) read_robot(r, root["robot"], s.robot);
     if (root["lidar"]) read_lidar(r, root["lidar"], s.lidar);

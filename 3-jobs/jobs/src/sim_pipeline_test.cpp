@@ -123,6 +123,9 @@ TEST(ScenarioYaml, UnknownKeysAndBadValuesNameTheKey) {
   EXPECT_EQ(stopping.robot.stops[1].for_s, 5.0);
   ASSERT_EQ(stopping.actors.at(0).stops.size(), 1u);
   EXPECT_EQ(stopping.actors[0].stops[0].for_s, 10.5);
+  EXPECT_EQ(parse_scenario("gait: planted", "s.yaml").gait, sim::Gait::kPlanted);
+  EXPECT_EQ(parse_scenario("name: x", "s.yaml").gait, sim::Gait::kSway);
+  expect_error("gait: run", "gait must be sway or planted, got 'run'");
   expect_error("robot: {stops: [[2]]}", "robot.stops[0] must be a list of 2 numbers");
   expect_error("robot: {stops: 3}", "robot.stops must be a list of [at_s, for_s]");
   expect_error("robot: {stops: [[2, 0]]}", "robot.stops[0].for_s must be");

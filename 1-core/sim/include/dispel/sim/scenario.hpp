@@ -213,8 +213,16 @@ struct RandomPeople {
   bool loop = true;
 };
 
+/// How a walking person's legs move (people are two legs; docs/simulator.md).
+/// kSway: each leg swings up to 0.15 m ahead of and behind the walker over each stride
+/// (1.4 m), never still. kPlanted: as people walk, each foot stands on the floor
+/// for 60 % of a stride while the body passes over it (from 0.42 m ahead of the body to 0.42 m
+/// behind), then swings forward at 2.5 times the walking speed.
+enum class Gait { kSway, kPlanted };
+
 struct Scenario {
   std::string name = "scenario";
+  Gait gait = Gait::kSway;
   double duration_s = 60.0;
   /// Stamp of the first message (ROS bags cannot hold time 0).
   double start_time_s = 100.0;

@@ -23,7 +23,7 @@ Without --people: background beams end in a 0.1 m cell of the registered frame (
   persisted (--cell, --min-scans, --min-span change 0.1, 20 and 10: a short or fast recording
   sees a place for fewer scans). Prints the share of all valid beams removed and of background
   beams kept."""
-import json, math, sys
+import bisect, json, math, sys
 import rosbag
 
 # Removed labels: dispel filter's 1 dynamic and 2 unknown; dispel clean's `_clean_labels` adds 5
@@ -95,13 +95,17 @@ def annotated(bag, topic, people_topic, radius):
             scans.append([m, []])
         elif scans:
             scans[-1][1].append((m.pose.position.x, m.pose.position.y, getattr(m, 'id', None)))
-    tracks = {}  # id -> [(stamp, x, y), ...] in time order
+    tracks = {}  # id -> ([stamp, ...], [(x, y), ...]) in time order
     for labels, people in scans:
         for x, y, pid in people:
-            tracks.setdefault(pid, []).append((labels.header.stamp.to_sec(), x, y))
+            stamps, places = tracks.setdefault(pid, ([], []))
+            stamps.append(labels.header.stamp.to_sec())
+            places.append((x, y))
     def standing(pid, stamp, x, y):
-        return all(math.hypot(px - x, py - y) <= STANDING_RADIUS_M
-                   for t, px, py in tracks.get(pid, []) if abs(t - stamp) <= STANDING_WINDOW_S)
+        stamps, places = tracks[pid]
+        lo = bisect.bisect_left(stamps, stamp - STANDING_WINDOW_S)
+        hi = bisect.bisect_right(stamps, stamp + STANDING_WINDOW_S)
+        return all(math.hypot(px - x, py - y) <= STANDING_RADIUS_M for px, py in places[lo:hi])
     count = {k: 0 for k in ('person', 'person_removed', 'walking', 'walking_removed', 'standing',
                             'standing_removed', 'background', 'background_kept')}
     annotated_scans = still_scans = 0

@@ -1028,18 +1028,19 @@ BeamLabel DynamicFilter::beam_label(std::size_t b, std::int32_t segment_label, b
   return v.object_class == ObjectClass::kDynamic ? BeamLabel::kDynamic : BeamLabel::kUnknown;
 }
 
-// Whether a dynamic track other than @p self, confirmed by its motion (not only by free space) and
-// seen in the last few scans, is within companion_distance_m of @p point_m: the other leg of a
-// walker whose planted foot has not moved while its free-space evidence was weighed.
-// How far a track marked by free space has moved since: its centroid's distance from where it
-// was, or for an elongated object its motion across itself and, when its edges show it, along.
 // Whether at least kNowhereShare of object @p object's beams returned nothing in the last learned
 // scan, or something more than kNowhereMargin_m farther (see there).
 bool DynamicFilter::appeared_from_nowhere(const LaserScan& scan, const Segmentation& segmentation,
                                           std::int32_t object) const {
-  if (previous_ranges_.size() != scan.size()) return false;
+  const std::size_t n = scan.size();
+  if (previous_ranges_.size() != n) return false;
+  // Its beams lie from first_beam to last_beam, across the seam of a full circle if need be.
+  const ScanObject& o = segmentation.objects[static_cast<std::size_t>(object)];
+  const auto first = static_cast<std::size_t>(o.first_beam);
+  const std::size_t span = (static_cast<std::size_t>(o.last_beam) + n - first) % n + 1;
   std::int32_t beams = 0, from_nowhere = 0;
-  for (std::size_t b = 0; b < scan.size(); ++b) {
+  for (std::size_t k = 0; k < span; ++k) {
+    const std::size_t b = (first + k) % n;
     if (segmentation.beam_labels[b] != object) continue;
     ++beams;
     const float was = previous_ranges_[b];
@@ -1054,6 +1055,8 @@ bool DynamicFilter::held_now(const Track& track, double stamp_s) {
   return track.held && track.free_space_pending && track.marked_s == stamp_s;
 }
 
+// How far a track marked by free space has moved since: its centroid's distance from where it
+// was, or for an elongated object its motion across itself and, when its edges show it, along.
 double DynamicFilter::moved_since_marked(const Track& track, const Observation& obs) {
   const Eigen::Vector2d moved = obs.points[kCentroid] - track.marked_at;
   const Eigen::Vector2d axis = obs.points[kLast] - obs.points[kFirst];
@@ -1083,6 +1086,9 @@ bool DynamicFilter::slides_unlike_the_sensor(const Track& track, const Observati
   return std::abs((track.kf[kCentroid].velocity() - sensor_velocity_).dot(along)) > tolerance;
 }
 
+// Whether a dynamic track other than @p self, confirmed by its motion (not only by free space) and
+// seen in the last few scans, is within companion_distance_m of @p point_m: the other leg of a
+// walker whose planted foot has not moved while its free-space evidence was weighed.
 bool DynamicFilter::beside_moving_track(const Track& self, const Eigen::Vector2d& point_m) const {
   const double limit = config_.tracking.companion_distance_m;
   if (!(limit > 0.0)) return false;

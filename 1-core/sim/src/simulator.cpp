@@ -944,11 +944,10 @@ std::int32_t simulate(const Scenario& scenario, std::uint64_t seed, double durat
         const Eigen::Vector2d fwd(std::cos(s.heading), std::sin(s.heading));
         const Eigen::Vector2d left(-fwd.y(), fwd.x());
         if (s.spec.kind == ActorKind::kPerson) {
-          double ahead_a = 0.15 * std::sin(s.gait_phase), ahead_b = -ahead_a;
-          if (scenario.gait == Gait::kPlanted) {
-            ahead_a = planted_foot_ahead(s.gait_phase);
-            ahead_b = planted_foot_ahead(s.gait_phase + kPi);
-          }
+          const bool planted = scenario.gait == Gait::kPlanted;
+          const double ahead_a =
+              planted ? planted_foot_ahead(s.gait_phase) : 0.15 * std::sin(s.gait_phase);
+          const double ahead_b = planted ? planted_foot_ahead(s.gait_phase + kPi) : -ahead_a;
           world.circles.push_back({s.position + ahead_a * fwd + 0.1 * left, 0.06});
           world.circles.push_back({s.position + ahead_b * fwd - 0.1 * left, 0.06});
           actor_of_circle.insert(actor_of_circle.end(), 2, static_cast<std::int32_t>(a));
